@@ -1,0 +1,5 @@
+//! CPU references of the kernels, written to read like the WGSL (same names, same loop order,
+//! same arithmetic order), so that a GPU/CPU mismatch points at one line.
+
+pub mod raster;
+pub mod resolve;

@@ -1,0 +1,157 @@
+//! The G-buffer and visibility buffer as the CPU reads them back, for both encodings. Mirrors
+//! `wgsl/shared/gbuffer.wgsl` and `wgsl/shared/vis.wgsl`.
+
+use glam::{Vec2, Vec3};
+
+use crate::settings::Precision;
+
+/// An empty visibility-buffer word (no surface).
+pub const VIS_EMPTY: u64 = u64::MAX;
+
+/// Bytes per pixel of a G-buffer layer.
+pub fn bytes_per_pixel(precision: Precision) -> u64 {
+    match precision {
+        Precision::Full => 64,
+        Precision::Packed => 32,
+    }
+}
+
+/// Packs a visibility word: `(depth bits << 32) | triangle id`.
+pub fn vis_pack(depth: f32, id: u32) -> u64 {
+    (u64::from(depth.to_bits()) << 32) | u64::from(id)
+}
+
+/// The triangle id of a visibility word (`None` when empty).
+pub fn vis_id(word: u64) -> Option<u32> {
+    (word != VIS_EMPTY).then_some(word as u32)
+}
+
+/// The view depth of a visibility word (`None` when empty).
+pub fn vis_depth(word: u64) -> Option<f32> {
+    (word != VIS_EMPTY).then(|| f32::from_bits((word >> 32) as u32))
+}
+
+/// One G-buffer sample. Mirrors `struct GSample` in `wgsl/shared/gbuffer.wgsl`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GSample {
+    /// View depth (0: no surface).
+    pub depth: f32,
+    /// World-space unit normal facing the camera.
+    pub normal: Vec3,
+    /// Linear base colour.
+    pub base_color: Vec3,
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Emitted radiance.
+    pub emissive: Vec3,
+    /// Metalness.
+    pub metallic: f32,
+    /// Screen motion in pixels (current position minus previous position).
+    pub motion: Vec2,
+    /// Mirror reflectivity.
+    pub reflectivity: f32,
+    /// Material id.
+    pub material: u32,
+}
+
+/// One G-buffer layer on the CPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GBufferLayer {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major samples, top row first.
+    pub samples: Vec<GSample>,
+}
+
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = (h >> 10) & 0x1f;
+    let frac = f32::from(h & 0x3ff);
+    match exp {
+        0 => sign * frac * 2f32.powi(-24),
+        31 => {
+            if frac == 0.0 {
+                sign * f32::INFINITY
+            } else {
+                f32::NAN
+            }
+        }
+        e => sign * (1.0 + frac / 1024.0) * 2f32.powi(i32::from(e) - 15),
+    }
+}
+
+fn unpack2x16float(w: u32) -> Vec2 {
+    Vec2::new(f16_to_f32(w as u16), f16_to_f32((w >> 16) as u16))
+}
+
+fn unpack2x16snorm(w: u32) -> Vec2 {
+    let c = |v: u16| (f32::from(v as i16) / 32767.0).max(-1.0);
+    Vec2::new(c(w as u16), c((w >> 16) as u16))
+}
+
+/// Inverse of the octahedral encoding in `wgsl/shared/gbuffer.wgsl`.
+pub fn oct_decode(e: Vec2) -> Vec3 {
+    let mut n = Vec3::new(e.x, e.y, 1.0 - e.x.abs() - e.y.abs());
+    let t = (-n.z).max(0.0);
+    n.x += if n.x >= 0.0 { -t } else { t };
+    n.y += if n.y >= 0.0 { -t } else { t };
+    n.normalize()
+}
+
+impl GBufferLayer {
+    /// Decodes the bytes of a G-buffer layer in `precision`.
+    pub fn decode(bytes: &[u8], width: u32, height: u32, precision: Precision) -> GBufferLayer {
+        let n = (width * height) as usize;
+        let samples = match precision {
+            Precision::Full => {
+                let f: &[f32] = bytemuck::cast_slice(&bytes[..n * 64]);
+                f.chunks_exact(16)
+                    .map(|w| GSample {
+                        depth: w[0],
+                        normal: Vec3::new(w[1], w[2], w[3]),
+                        base_color: Vec3::new(w[4], w[5], w[6]),
+                        roughness: w[7],
+                        emissive: Vec3::new(w[8], w[9], w[10]),
+                        metallic: w[11],
+                        motion: Vec2::new(w[12], w[13]),
+                        reflectivity: w[14],
+                        material: w[15] as u32,
+                    })
+                    .collect()
+            }
+            Precision::Packed => {
+                let u: &[u32] = bytemuck::cast_slice(&bytes[..n * 32]);
+                u.chunks_exact(8)
+                    .map(|w| {
+                        let depth = f32::from_bits(w[0]);
+                        let c = w[2].to_le_bytes().map(|b| f32::from(b) / 255.0);
+                        let bm = unpack2x16float(w[4]);
+                        GSample {
+                            depth,
+                            normal: if depth > 0.0 {
+                                oct_decode(unpack2x16snorm(w[1]))
+                            } else {
+                                Vec3::ZERO
+                            },
+                            base_color: Vec3::new(c[0], c[1], c[2]),
+                            roughness: c[3],
+                            emissive: unpack2x16float(w[3]).extend(bm.x),
+                            metallic: bm.y,
+                            motion: unpack2x16float(w[5]),
+                            reflectivity: f32::from(w[6] as u16) / 65535.0,
+                            material: w[6] >> 16,
+                        }
+                    })
+                    .collect()
+            }
+        };
+        GBufferLayer { width, height, samples }
+    }
+
+    /// The sample at pixel (x, y).
+    pub fn at(&self, x: u32, y: u32) -> &GSample {
+        &self.samples[(y * self.width + x) as usize]
+    }
+}

@@ -1,0 +1,109 @@
+//! The per-frame uniform every kernel reads.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
+use crate::scene::Camera;
+
+/// Pixels beyond each side of the viewport inside which vertices are snapped without clipping.
+/// Fixed-point coordinates stay below 2^28 (1/256 pixel), so exact edge functions fit in i64.
+pub const GUARD_BAND_PIXELS: f32 = 1_048_576.0;
+
+/// Largest image side: keeps fixed-point coordinates within the guard band's bound.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// Mirrors `struct Frame` in `wgsl/shared/frame.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct FrameUniform {
+    /// World to view.
+    pub view: [[f32; 4]; 4],
+    /// View to clip.
+    pub proj: [[f32; 4]; 4],
+    /// View to world.
+    pub inv_view: [[f32; 4]; 4],
+    /// The previous frame's world to view.
+    pub prev_view: [[f32; 4]; 4],
+    /// The previous frame's world to clip.
+    pub prev_view_proj: [[f32; 4]; 4],
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Near view depth.
+    pub near: f32,
+    /// Far view depth (`f32::MAX` when infinite).
+    pub far: f32,
+    /// Guard band half-width in NDC units (x).
+    pub guard_x: f32,
+    /// Guard band half-height in NDC units (y).
+    pub guard_y: f32,
+    /// Minimum separation of layer 1 behind layer 0, in scene units.
+    pub dz: f32,
+    /// 1 for an orthographic camera.
+    pub ortho: u32,
+    /// Triangles in the scene.
+    pub triangle_count: u32,
+    /// Materials in the scene.
+    pub material_count: u32,
+    /// Vertices in the scene.
+    pub vertex_count: u32,
+    /// Padding.
+    pub _pad: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 5 * 64 + 12 * 4);
+
+/// The matrices of one camera at one image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraMatrices {
+    /// World to view.
+    pub view: Mat4,
+    /// View to clip.
+    pub proj: Mat4,
+}
+
+impl CameraMatrices {
+    /// The matrices of `camera` for a `width` x `height` image.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        CameraMatrices {
+            view: camera.view(),
+            proj: camera.projection(width as f32 / height as f32),
+        }
+    }
+}
+
+impl FrameUniform {
+    /// The uniform for `current` after `previous` (the same camera on a first frame).
+    #[expect(clippy::too_many_arguments, reason = "one plain constructor for a plain struct")]
+    pub fn new(
+        camera: &Camera,
+        current: CameraMatrices,
+        previous: CameraMatrices,
+        width: u32,
+        height: u32,
+        dz: f32,
+        counts: (u32, u32, u32),
+    ) -> Self {
+        let (near, far) = camera.depth_range();
+        FrameUniform {
+            view: current.view.to_cols_array_2d(),
+            proj: current.proj.to_cols_array_2d(),
+            inv_view: current.view.inverse().to_cols_array_2d(),
+            prev_view: previous.view.to_cols_array_2d(),
+            prev_view_proj: (previous.proj * previous.view).to_cols_array_2d(),
+            width,
+            height,
+            near,
+            far,
+            guard_x: 1.0 + 2.0 * GUARD_BAND_PIXELS / width as f32,
+            guard_y: 1.0 + 2.0 * GUARD_BAND_PIXELS / height as f32,
+            dz,
+            ortho: camera.is_orthographic() as u32,
+            triangle_count: counts.0,
+            material_count: counts.1,
+            vertex_count: counts.2,
+            _pad: 0,
+        }
+    }
+}

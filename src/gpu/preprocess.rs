@@ -1,0 +1,81 @@
+//! A small WGSL preprocessor, shared by `build.rs` (validation) and the runtime (shader
+//! creation): `#include "path"` (relative to `wgsl/`, each file once), and `#if NAME`,
+//! `#if !NAME`, `#else`, `#endif` on defined names. Lines it consumes become empty lines, so the
+//! top-level kernel keeps its line numbers in error messages.
+
+/// Expands `source` (the file `name`) with `defines`; `lookup` finds an included file's text.
+pub fn preprocess<'a>(
+    name: &str,
+    source: &'a str,
+    defines: &[&str],
+    lookup: &dyn Fn(&str) -> Option<&'a str>,
+) -> Result<String, String> {
+    let mut out = String::with_capacity(source.len() * 2);
+    let mut included: Vec<String> = Vec::new();
+    expand(name, source, defines, lookup, &mut included, &mut out)?;
+    Ok(out)
+}
+
+fn expand<'a>(
+    name: &str,
+    source: &'a str,
+    defines: &[&str],
+    lookup: &dyn Fn(&str) -> Option<&'a str>,
+    included: &mut Vec<String>,
+    out: &mut String,
+) -> Result<(), String> {
+    // Each entry: (this branch is active, some branch of this #if was taken, parent active).
+    let mut stack: Vec<(bool, bool)> = Vec::new();
+    let active = |stack: &[(bool, bool)]| stack.iter().all(|s| s.0);
+    for (n, line) in source.lines().enumerate() {
+        let trimmed = line.trim();
+        let at = || format!("{name}:{}", n + 1);
+        if let Some(cond) = trimmed.strip_prefix("#if ") {
+            let cond = cond.trim();
+            let (negate, sym) = match cond.strip_prefix('!') {
+                Some(s) => (true, s.trim()),
+                None => (false, cond),
+            };
+            let value = defines.contains(&sym) != negate;
+            stack.push((value, value));
+            out.push('\n');
+        } else if trimmed == "#else" {
+            let top = stack.last_mut().ok_or_else(|| format!("{}: #else without #if", at()))?;
+            *top = (!top.1, true);
+            out.push('\n');
+        } else if trimmed == "#endif" {
+            stack.pop().ok_or_else(|| format!("{}: #endif without #if", at()))?;
+            out.push('\n');
+        } else if let Some(rest) = trimmed.strip_prefix("#include") {
+            if active(&stack) {
+                let file = rest.trim().trim_matches('"');
+                if !included.iter().any(|f| f == file) {
+                    included.push(file.to_string());
+                    let text =
+                        lookup(file).ok_or_else(|| format!("{}: cannot include `{file}`", at()))?;
+                    expand(file, text, defines, lookup, included, out)?;
+                }
+            }
+            out.push('\n');
+        } else if active(&stack) {
+            out.push_str(line);
+            out.push('\n');
+        } else {
+            out.push('\n');
+        }
+    }
+    if !stack.is_empty() {
+        return Err(format!("{name}: #if without #endif"));
+    }
+    Ok(())
+}
+
+/// The defines a kernel declares on its `// defines: A B C` line (none without one): the only
+/// names it may be compiled with, and the combinations `build.rs` validates.
+pub fn declared_defines(source: &str) -> Vec<&str> {
+    source
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("// defines:"))
+        .map(|rest| rest.split_whitespace().collect())
+        .unwrap_or_default()
+}

@@ -1,0 +1,246 @@
+//! The `deep-gbuffer` command line: render a scene's deep G-buffer, describe the device.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use deep_gbuffer::gpu::{Gpu, GpuOptions};
+use deep_gbuffer::scene::Projection;
+use deep_gbuffer::{
+    AtomicPath, Camera, Error, Layer1Variant, Precision, Renderer, Result, Scene, SceneBuffers,
+    Settings, output,
+};
+use glam::Vec3;
+
+#[derive(Parser)]
+#[command(
+    name = "deep-gbuffer",
+    version,
+    about = "Two-layer deep G-buffers by compute software rasterization"
+)]
+struct Cli {
+    /// Open the adapter whose name contains this (see `deep-gbuffer info`).
+    #[arg(long, global = true)]
+    adapter: Option<String>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene: its deep G-buffer layers and a preview image.
+    Render(RenderArgs),
+    /// Print the adapter, backend, driver, features and the active raster path.
+    Info,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// A .gltf, .glb or .obj file, or builtin:NAME (cornell, grid, grid-<triangles>).
+    #[arg(default_value = "builtin:cornell")]
+    scene: String,
+    /// Image size, WxH.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    #[arg(long)]
+    camera: Option<String>,
+    /// Write depth, normal and base colour of both layers as PNG and EXR into this folder.
+    #[arg(long)]
+    layers: Option<PathBuf>,
+    /// Write the image as PNG (layer 0 simply shaded).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write the image as linear EXR.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+    /// Write per-pass GPU times (timestamp queries) as JSON.
+    #[arg(long)]
+    timings: Option<PathBuf>,
+    /// Minimum separation of layer 1 behind layer 0, in scene units.
+    #[arg(long, default_value_t = Settings::default().dz)]
+    dz: f32,
+    /// How layer 1 is rasterized.
+    #[arg(long, value_enum, default_value_t = Layer1Variant::TwoPass)]
+    layer1: Layer1Variant,
+    /// G-buffer precision.
+    #[arg(long, value_enum, default_value_t = Precision::Full)]
+    precision: Precision,
+    /// Raster atomics.
+    #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
+    atomics: AtomicPath,
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("`{s}` is not WxH"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("`{w}` is not a width"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("`{h}` is not a height"))?;
+    Ok((w, h))
+}
+
+/// Applies `eye=x,y,z,target=x,y,z,fov=deg` to `camera`.
+fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
+    let bad = |m: String| Error::InvalidSetting { name: "camera", message: m };
+    let mut key: Option<&str> = None;
+    let mut values: Vec<(&str, Vec<f32>)> = Vec::new();
+    for token in spec.split(',') {
+        let token = token.trim();
+        let value = match token.split_once('=') {
+            Some((k, v)) => {
+                key = Some(k.trim());
+                values.push((k.trim(), Vec::new()));
+                v
+            }
+            None => token,
+        };
+        let k = key.ok_or_else(|| bad(format!("`{spec}`: expected key=value")))?;
+        let v: f32 =
+            value.trim().parse().map_err(|_| bad(format!("`{value}` in {k} is not a number")))?;
+        values.last_mut().expect("a key was pushed").1.push(v);
+    }
+    for (k, v) in values {
+        match (k, v.as_slice()) {
+            ("eye", &[x, y, z]) => camera.eye = Vec3::new(x, y, z),
+            ("target", &[x, y, z]) => camera.target = Vec3::new(x, y, z),
+            ("up", &[x, y, z]) => camera.up = Vec3::new(x, y, z),
+            ("fov", &[deg]) => match &mut camera.projection {
+                Projection::Perspective { fov_y_deg, .. } => *fov_y_deg = deg,
+                Projection::Orthographic { .. } => {
+                    return Err(bad("fov given for an orthographic camera".into()));
+                }
+            },
+            (k, v) => {
+                return Err(bad(format!(
+                    "`{k}` with {} values (expected eye, target, up: 3; fov: 1)",
+                    v.len()
+                )));
+            }
+        }
+    }
+    camera.validate()
+}
+
+fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
+    Gpu::new(&GpuOptions { adapter: cli_adapter.clone() })
+}
+
+fn info(adapter: &Option<String>) -> Result<()> {
+    let gpu = open_gpu(adapter)?;
+    let i = gpu.adapter.get_info();
+    println!("adapter:  {}", i.name);
+    println!("backend:  {:?}", i.backend);
+    println!("type:     {:?}", i.device_type);
+    println!("driver:   {} {}", i.driver, i.driver_info);
+    let f = gpu.device.features();
+    for (name, feature) in [
+        ("SHADER_INT64", wgpu::Features::SHADER_INT64),
+        ("SHADER_INT64_ATOMIC_MIN_MAX", wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX),
+        ("TIMESTAMP_QUERY", wgpu::Features::TIMESTAMP_QUERY),
+    ] {
+        println!("feature:  {name}: {}", if f.contains(feature) { "yes" } else { "no" });
+    }
+    let l = gpu.device.limits();
+    println!("limit:    max storage buffer binding {} bytes", l.max_storage_buffer_binding_size);
+    let renderer = Renderer::new(&gpu.device, &gpu.queue, Settings::with_size(64, 64))?;
+    let path = match renderer.raster_path() {
+        "int64" => "int64 (one 64-bit atomicMin per fragment)",
+        _ => "int32 (depth pass, then id pass; the device lacks 64-bit atomics)",
+    };
+    println!("raster:   {path}");
+    Ok(())
+}
+
+#[derive(serde::Serialize)]
+struct TimingsFile<'a> {
+    adapter: String,
+    width: u32,
+    height: u32,
+    raster_path: &'a str,
+    triangles: u32,
+    passes: Vec<deep_gbuffer::gpu::PassTiming>,
+    total_ms: f64,
+}
+
+fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
+    let settings = Settings {
+        width: args.size.0,
+        height: args.size.1,
+        dz: args.dz,
+        layer1: args.layer1,
+        precision: args.precision,
+        atomics: args.atomics,
+        ..Settings::default()
+    };
+    settings.validate()?;
+    let mut scene = Scene::from_spec(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    scene.ensure_lights();
+    let mut camera = scene.camera_or_default();
+    if let Some(spec) = &args.camera {
+        apply_camera(&mut camera, spec)?;
+    }
+    let gpu = open_gpu(adapter)?;
+    let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
+    let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;
+    renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+    let layers = (0..settings.layers as usize)
+        .map(|l| renderer.read_gbuffer(&gpu.device, &gpu.queue, l))
+        .collect::<Result<Vec<_>>>()?;
+    let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue)?;
+    if diagnostics.dropped_triangles > 0 {
+        eprintln!(
+            "warning: {} large triangles did not fit the raster bin and were not drawn",
+            diagnostics.dropped_triangles
+        );
+    }
+    let (w, h) = (settings.width, settings.height);
+    if let Some(dir) = &args.layers {
+        output::write_layers(dir, &layers)?;
+    }
+    let view_dir = (camera.target - camera.eye).normalize();
+    let image = output::preview(&layers[0], view_dir);
+    if let Some(path) = &args.out {
+        output::write_png_linear(path, w, h, &image)?;
+    }
+    if let Some(path) = &args.exr {
+        output::write_exr(path, w, h, &image)?;
+    }
+    if let Some(path) = &args.timings {
+        let passes = renderer.timings(&gpu.device)?;
+        if passes.is_empty() {
+            eprintln!("warning: the device has no timestamp queries; the timings list is empty");
+        }
+        let file = TimingsFile {
+            adapter: gpu.adapter.get_info().name,
+            width: w,
+            height: h,
+            raster_path: renderer.raster_path(),
+            triangles: buffers.triangle_count(),
+            total_ms: passes.iter().map(|p| p.ms).sum(),
+            passes,
+        };
+        let json = serde_json::to_string_pretty(&file).expect("plain data serializes");
+        std::fs::write(path, json).map_err(|e| Error::Io { path: path.clone(), source: e })?;
+    }
+    if args.out.is_none() && args.exr.is_none() && args.layers.is_none() && args.timings.is_none() {
+        eprintln!("rendered {w}x{h}; nothing written (give --out, --exr, --layers or --timings)");
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(&cli.adapter, args),
+        Command::Info => info(&cli.adapter),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

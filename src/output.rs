@@ -1,0 +1,108 @@
+//! Writing images: G-buffer layers as PNG (to look at) and EXR (raw values), and a simply
+//! shaded preview of layer 0.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::gbuffer::GBufferLayer;
+use crate::{Error, Result};
+
+fn srgb(c: f32) -> u8 {
+    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
+    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// Writes an 8-bit RGB PNG from linear colours (sRGB encoded on the way).
+pub fn write_png_linear(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    let bytes: Vec<u8> = pixels.iter().flat_map(|c| [srgb(c.x), srgb(c.y), srgb(c.z)]).collect();
+    write_png_raw(path, width, height, bytes)
+}
+
+/// Writes an 8-bit RGB PNG from values already in [0, 1] display space (no sRGB curve).
+pub fn write_png_display(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    let q = |c: f32| (if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 } * 255.0 + 0.5) as u8;
+    let bytes: Vec<u8> = pixels.iter().flat_map(|c| [q(c.x), q(c.y), q(c.z)]).collect();
+    write_png_raw(path, width, height, bytes)
+}
+
+fn write_png_raw(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
+    let image = image::RgbImage::from_raw(width, height, bytes).expect("3 bytes per pixel");
+    image.save(path).map_err(|e| Error::ImageWrite { path: path.into(), message: e.to_string() })
+}
+
+/// Writes a 32-bit float RGB EXR.
+pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    let w = width as usize;
+    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+        let c = pixels[y * w + x];
+        (c.x, c.y, c.z)
+    })
+    .map_err(|e| Error::ImageWrite { path: path.into(), message: e.to_string() })
+}
+
+/// Depth shown as brightness: near is white, far dark, no surface black (range over both
+/// layers when given together, so they compare).
+pub fn depth_display(layers: &[&GBufferLayer]) -> Vec<Vec<Vec3>> {
+    let depths = layers.iter().flat_map(|l| l.samples.iter().map(|s| s.depth)).filter(|d| *d > 0.0);
+    let (lo, hi) = depths.fold((f32::MAX, 0.0f32), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    let range = (hi - lo).max(1e-6);
+    layers
+        .iter()
+        .map(|l| {
+            l.samples
+                .iter()
+                .map(|s| {
+                    if s.depth > 0.0 {
+                        Vec3::splat(1.0 - 0.85 * (s.depth - lo) / range)
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Writes `layer{i}_depth`, `layer{i}_normal` and `layer{i}_basecolor` as PNG and EXR into `dir`.
+pub fn write_layers(dir: &Path, layers: &[GBufferLayer]) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let refs: Vec<&GBufferLayer> = layers.iter().collect();
+    let depth_png = depth_display(&refs);
+    for (i, l) in layers.iter().enumerate() {
+        let (w, h) = (l.width, l.height);
+        let depth: Vec<Vec3> = l.samples.iter().map(|s| Vec3::splat(s.depth)).collect();
+        let normal: Vec<Vec3> = l.samples.iter().map(|s| s.normal).collect();
+        let normal_png: Vec<Vec3> = l
+            .samples
+            .iter()
+            .map(|s| if s.depth > 0.0 { s.normal * 0.5 + 0.5 } else { Vec3::ZERO })
+            .collect();
+        let base: Vec<Vec3> = l.samples.iter().map(|s| s.base_color).collect();
+        write_png_display(&dir.join(format!("layer{i}_depth.png")), w, h, &depth_png[i])?;
+        write_exr(&dir.join(format!("layer{i}_depth.exr")), w, h, &depth)?;
+        write_png_display(&dir.join(format!("layer{i}_normal.png")), w, h, &normal_png)?;
+        write_exr(&dir.join(format!("layer{i}_normal.exr")), w, h, &normal)?;
+        write_png_linear(&dir.join(format!("layer{i}_basecolor.png")), w, h, &base)?;
+        write_exr(&dir.join(format!("layer{i}_basecolor.exr")), w, h, &base)?;
+    }
+    Ok(())
+}
+
+/// Layer 0 simply shaded: base colour lit by a headlight and a fixed key light, plus emission.
+pub fn preview(layer: &GBufferLayer, view_dir: Vec3) -> Vec<Vec3> {
+    let key = Vec3::new(0.3, 0.8, 0.5).normalize();
+    layer
+        .samples
+        .iter()
+        .map(|s| {
+            if s.depth <= 0.0 {
+                return Vec3::splat(0.02);
+            }
+            let head = s.normal.dot(-view_dir).abs();
+            let light = 0.15 + 0.55 * head + 0.3 * s.normal.dot(key).max(0.0);
+            s.base_color * light + s.emissive.min(Vec3::ONE)
+        })
+        .collect()
+}

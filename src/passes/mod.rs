@@ -1,0 +1,5 @@
+//! One module per kernel: its pipelines, bindings and `encode`.
+
+pub mod fill;
+pub mod raster;
+pub mod resolve;

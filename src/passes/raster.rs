@@ -1,0 +1,156 @@
+//! `wgsl/raster.wgsl`: the compute rasterizer that writes visibility buffers.
+//!
+//! One raster step is three dispatches: `raster_small` over all triangles (small ones are
+//! rasterized in place, large ones binned), `bin_args` (indirect arguments) and `raster_large`
+//! (indirect, 16x16 tiles). On the 32-bit path every step runs twice: a depth phase, then an id
+//! phase; on the 64-bit path once.
+
+use std::collections::HashMap;
+
+use crate::SceneBuffers;
+use crate::gpu;
+
+/// What one raster step writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RasterMode {
+    /// Layer 0 only.
+    Layer0,
+    /// Layer 1 only, against `zref` (the final layer 0 of this frame).
+    Layer1,
+    /// Both layers in one pass, layer 1 against `zref` (the previous frame's layer 0), compared
+    /// at the same pixel or, with `reproject`, at the fragment's position in the previous frame.
+    Both {
+        /// Compare at the reprojected position.
+        reproject: bool,
+    },
+    /// Count every covered fragment per pixel into a u32 buffer (watertightness tests).
+    Count,
+}
+
+struct Pipelines {
+    small: wgpu::ComputePipeline,
+    args: wgpu::ComputePipeline,
+    large: wgpu::ComputePipeline,
+}
+
+/// The buffers one raster step reads and writes.
+pub struct RasterTargets<'a> {
+    /// The frame uniform.
+    pub frame: &'a wgpu::Buffer,
+    /// Bin counters (16 bytes).
+    pub bins: &'a wgpu::Buffer,
+    /// The large-triangle bin.
+    pub large: &'a wgpu::Buffer,
+    /// Indirect arguments for `raster_large` (16 bytes, INDIRECT usage).
+    pub args: &'a wgpu::Buffer,
+    /// Layer 0 visibility buffer (Layer0, Both).
+    pub vis0: Option<&'a wgpu::Buffer>,
+    /// Layer 1 visibility buffer (Layer1, Both).
+    pub vis1: Option<&'a wgpu::Buffer>,
+    /// The visibility buffer layer 1 is separated from (Layer1, Both).
+    pub zref: Option<&'a wgpu::Buffer>,
+    /// Per-pixel fragment counts (Count).
+    pub counts: Option<&'a wgpu::Buffer>,
+}
+
+/// The raster kernels, for one atomic path, built on first use per mode.
+pub struct RasterPass {
+    int64: bool,
+    pipelines: HashMap<(RasterMode, bool), Pipelines>,
+}
+
+impl RasterPass {
+    /// `int64`: use 64-bit atomics (the device must have them).
+    pub fn new(int64: bool) -> Self {
+        RasterPass { int64, pipelines: HashMap::new() }
+    }
+
+    /// Whether this uses the 64-bit atomic path.
+    pub fn int64(&self) -> bool {
+        self.int64
+    }
+
+    fn pipelines(
+        &mut self,
+        device: &wgpu::Device,
+        mode: RasterMode,
+        depth_phase: bool,
+    ) -> &Pipelines {
+        let int64 = self.int64;
+        self.pipelines.entry((mode, depth_phase)).or_insert_with(|| {
+            let mut defines: Vec<&str> = match mode {
+                RasterMode::Layer0 => vec!["WRITE_L0"],
+                RasterMode::Layer1 => vec!["WRITE_L1"],
+                RasterMode::Both { reproject: false } => vec!["WRITE_L0", "WRITE_L1"],
+                RasterMode::Both { reproject: true } => vec!["WRITE_L0", "WRITE_L1", "REPROJECT"],
+                RasterMode::Count => vec!["COUNT"],
+            };
+            if int64 {
+                defines.push("INT64");
+            } else if depth_phase {
+                defines.push("DEPTH_PHASE");
+            }
+            Pipelines {
+                small: gpu::compute_pipeline(device, "raster", "raster_small", &defines),
+                args: gpu::compute_pipeline(device, "raster", "bin_args", &defines),
+                large: gpu::compute_pipeline(device, "raster", "raster_large", &defines),
+            }
+        })
+    }
+
+    /// Records one raster step (both phases on the 32-bit path) into `pass`.
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        pass: &mut wgpu::ComputePass<'_>,
+        scene: &SceneBuffers,
+        mode: RasterMode,
+        t: &RasterTargets<'_>,
+    ) {
+        let phases: &[bool] =
+            if self.int64 || mode == RasterMode::Count { &[false] } else { &[true, false] };
+        let b = scene.buffers();
+        for &depth_phase in phases {
+            let p = self.pipelines(device, mode, depth_phase);
+            let mut entries: Vec<(u32, &wgpu::Buffer)> = vec![
+                (0, t.frame),
+                (1, &b.positions),
+                (2, &b.indices),
+                (3, &b.triangle_materials),
+                (4, &b.materials),
+                (5, t.bins),
+                (6, t.large),
+            ];
+            let optional = [(8, t.vis0), (9, t.vis1), (10, t.zref), (11, t.counts)];
+            let wanted: &[u32] = match mode {
+                RasterMode::Layer0 => &[8],
+                RasterMode::Layer1 => &[9, 10],
+                RasterMode::Both { .. } => &[8, 9, 10],
+                RasterMode::Count => &[11],
+            };
+            for (binding, buffer) in optional {
+                if wanted.contains(&binding) {
+                    entries.push((binding, buffer.expect("the mode's buffers are given")));
+                }
+            }
+            let small = gpu::bind_group(device, "deep-gbuffer.raster.small", &p.small, &entries);
+            let large = gpu::bind_group(device, "deep-gbuffer.raster.large", &p.large, &entries);
+            let args = gpu::bind_group(
+                device,
+                "deep-gbuffer.raster.args",
+                &p.args,
+                &[(5, t.bins), (6, t.large), (7, t.args)],
+            );
+            let (x, y) = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
+            pass.set_pipeline(&p.small);
+            pass.set_bind_group(0, &small, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+            pass.set_pipeline(&p.args);
+            pass.set_bind_group(0, &args, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&p.large);
+            pass.set_bind_group(0, &large, &[]);
+            pass.dispatch_workgroups_indirect(t.args, 0);
+        }
+    }
+}

@@ -1,0 +1,371 @@
+//! [`Renderer`]: the deep G-buffer stage, recorded into a caller's command encoder.
+
+use crate::SceneBuffers;
+use crate::gbuffer::{self, GBufferLayer};
+use crate::gpu::frame::CameraMatrices;
+use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
+use crate::passes::fill::FillPass;
+use crate::passes::raster::{RasterMode, RasterPass, RasterTargets};
+use crate::passes::resolve::ResolvePass;
+use crate::scene::Camera;
+use crate::settings::{AtomicPath, Layer1Variant, Settings};
+use crate::{Error, Result};
+
+/// Counters the GPU keeps while rasterizing, read with [`Renderer::diagnostics`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Diagnostics {
+    /// Triangles (after clipping) rasterized by the large-triangle tiles in the last frame.
+    pub large_triangles: u32,
+    /// Large triangles dropped because the bin was full (0 unless the bin is undersized).
+    pub dropped_triangles: u32,
+}
+
+/// Passes one frame can time (the capacity of the timestamp query set).
+const MAX_TIMED_PASSES: u32 = 32;
+
+/// Renders deep G-buffers on a device it borrows.
+///
+/// Create it once per device and image size; call [`encode`](Renderer::encode) once per frame.
+/// It owns only its targets and the history that the one-pass layer-1 variants need.
+pub struct Renderer {
+    settings: Settings,
+    fill: FillPass,
+    raster: RasterPass,
+    resolve: ResolvePass,
+    frame: wgpu::Buffer,
+    bins: wgpu::Buffer,
+    args: wgpu::Buffer,
+    large: Option<wgpu::Buffer>,
+    vis0: [wgpu::Buffer; 2],
+    vis1: wgpu::Buffer,
+    gbuffer: [wgpu::Buffer; 2],
+    /// Which `vis0` holds the last frame's layer 0.
+    last: usize,
+    history: Option<CameraMatrices>,
+    timestamps: Option<Timestamps>,
+    passes: Vec<String>,
+}
+
+impl Renderer {
+    /// Features deep-gbuffer cannot run without (none: every path has a fallback).
+    pub fn required_features() -> wgpu::Features {
+        wgpu::Features::empty()
+    }
+
+    /// The features of the 64-bit atomic raster path.
+    pub fn int64_features() -> wgpu::Features {
+        wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+    }
+
+    /// Features used when present: 64-bit atomics (one raster pass instead of two) and
+    /// timestamp queries (per-pass GPU timings).
+    pub fn optional_features() -> wgpu::Features {
+        Self::int64_features() | wgpu::Features::TIMESTAMP_QUERY
+    }
+
+    /// Limits deep-gbuffer needs beyond the WebGPU defaults: 12 storage buffers per stage. Raise
+    /// `max_storage_buffer_binding_size` to the adapter's for large images (a layer at 1920x1080
+    /// in full precision is 133 MB).
+    pub fn required_limits() -> wgpu::Limits {
+        wgpu::Limits { max_storage_buffers_per_shader_stage: 12, ..wgpu::Limits::default() }
+    }
+
+    /// Creates the renderer's pipelines and targets on `device`.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Renderer> {
+        settings.validate()?;
+        let features = device.features();
+        let int64 = match settings.atomics {
+            AtomicPath::Auto => features.contains(Self::int64_features()),
+            AtomicPath::Int64 => {
+                if !features.contains(wgpu::Features::SHADER_INT64) {
+                    return Err(Error::MissingFeature("SHADER_INT64"));
+                }
+                if !features.contains(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX) {
+                    return Err(Error::MissingFeature("SHADER_INT64_ATOMIC_MIN_MAX"));
+                }
+                true
+            }
+            AtomicPath::Int32 => false,
+        };
+        let limits = device.limits();
+        if limits.max_storage_buffers_per_shader_stage
+            < Self::required_limits().max_storage_buffers_per_shader_stage
+        {
+            return Err(Error::ExceedsLimit {
+                what: "storage buffers per shader stage".into(),
+                needed: u64::from(Self::required_limits().max_storage_buffers_per_shader_stage),
+                limit: u64::from(limits.max_storage_buffers_per_shader_stage),
+            });
+        }
+        let pixels = u64::from(settings.width) * u64::from(settings.height);
+        let binding_limit =
+            u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let gbuffer_bytes = pixels * gbuffer::bytes_per_pixel(settings.precision);
+        if gbuffer_bytes > binding_limit {
+            return Err(Error::ExceedsLimit {
+                what: format!(
+                    "a {}x{} G-buffer layer ({:?})",
+                    settings.width, settings.height, settings.precision
+                ),
+                needed: gbuffer_bytes,
+                limit: binding_limit,
+            });
+        }
+        let vis = |label: &str| {
+            gpu::storage_buffer(device, label, pixels * 8, wgpu::BufferUsages::empty())
+        };
+        let g = |label: &str| {
+            gpu::storage_buffer(device, label, gbuffer_bytes, wgpu::BufferUsages::empty())
+        };
+        Ok(Renderer {
+            fill: FillPass::new(device),
+            raster: RasterPass::new(int64),
+            resolve: ResolvePass::new(device, settings.precision),
+            frame: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("deep-gbuffer.frame"),
+                size: std::mem::size_of::<FrameUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            bins: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.raster.bins",
+                16,
+                wgpu::BufferUsages::empty(),
+            ),
+            args: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.raster.args",
+                16,
+                wgpu::BufferUsages::INDIRECT,
+            ),
+            large: None,
+            vis0: [vis("deep-gbuffer.raster.vis0.a"), vis("deep-gbuffer.raster.vis0.b")],
+            vis1: vis("deep-gbuffer.raster.vis1"),
+            gbuffer: [g("deep-gbuffer.resolve.layer0"), g("deep-gbuffer.resolve.layer1")],
+            last: 0,
+            history: None,
+            timestamps: if settings.timings {
+                Timestamps::new(device, queue, MAX_TIMED_PASSES)
+            } else {
+                None
+            },
+            passes: Vec::new(),
+            settings,
+        })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// `"int64"` (one 64-bit atomicMin per fragment) or `"int32"` (depth pass, then id pass).
+    pub fn raster_path(&self) -> &'static str {
+        if self.raster.int64() { "int64" } else { "int32" }
+    }
+
+    /// Forgets the previous frame (a camera cut): the next frame rasterizes layer 1 exactly.
+    pub fn reset_history(&mut self) {
+        self.history = None;
+    }
+
+    /// The names of the passes the last [`encode`](Renderer::encode) recorded, in order.
+    pub fn passes(&self) -> &[String] {
+        &self.passes
+    }
+
+    /// Records one frame (raster both layers, resolve) into `encoder`. Submit it, then read the
+    /// results with [`read_gbuffer`](Renderer::read_gbuffer) or use
+    /// [`gbuffer_buffer`](Renderer::gbuffer_buffer) in your own passes.
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        camera: &Camera,
+    ) -> Result<()> {
+        camera.validate()?;
+        let s = &self.settings;
+        let current = CameraMatrices::new(camera, s.width, s.height);
+        let previous = self.history.unwrap_or(current);
+        let b = scene.buffers();
+        let uniform = FrameUniform::new(
+            camera,
+            current,
+            previous,
+            s.width,
+            s.height,
+            s.dz,
+            (b.triangle_count, b.material_count, b.vertex_count),
+        );
+        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
+        let needed = (u64::from(b.triangle_count) * 2 + 1024) * 4;
+        if self.large.as_ref().is_none_or(|l| l.size() < needed) {
+            let limit = u64::from(device.limits().max_storage_buffer_binding_size) & !3;
+            self.large = Some(gpu::storage_buffer(
+                device,
+                "deep-gbuffer.raster.large",
+                needed.min(limit),
+                wgpu::BufferUsages::empty(),
+            ));
+        }
+        encoder.clear_buffer(&self.bins, 0, None);
+
+        let one_pass =
+            s.layers == 2 && s.layer1 != Layer1Variant::TwoPass && self.history.is_some();
+        let write = 1 - self.last;
+        let (vis0, prev_vis0) = (&self.vis0[write], &self.vis0[self.last]);
+        let large = self.large.as_ref().expect("allocated above");
+        let (frame, bins, args) = (&self.frame, &self.bins, &self.args);
+        let targets = |vis0, vis1, zref| RasterTargets {
+            frame,
+            bins,
+            large,
+            args,
+            vis0,
+            vis1,
+            zref,
+            counts: None,
+        };
+        let mut timestamps = self.timestamps.as_mut();
+        if let Some(t) = timestamps.as_deref_mut() {
+            t.reset();
+        }
+        let mut passes: Vec<String> = Vec::new();
+        let mut begin = |encoder: &mut wgpu::CommandEncoder, name: &str| {
+            passes.push(name.to_string());
+            let label = format!("deep-gbuffer.{name}");
+            let timestamp_writes = timestamps.as_deref_mut().and_then(|t| t.pass(name));
+            encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(&label),
+                    timestamp_writes,
+                })
+                .forget_lifetime()
+        };
+
+        {
+            let mut pass = begin(encoder, "raster.clear");
+            self.fill.encode(device, &mut pass, vis0, u32::MAX);
+            if s.layers == 2 {
+                self.fill.encode(device, &mut pass, &self.vis1, u32::MAX);
+            }
+        }
+        if one_pass {
+            let reproject = s.layer1 == Layer1Variant::Reproject;
+            let mut pass = begin(encoder, "raster.layers");
+            let t = targets(Some(vis0), Some(&self.vis1), Some(prev_vis0));
+            self.raster.encode(device, &mut pass, scene, RasterMode::Both { reproject }, &t);
+        } else {
+            {
+                let mut pass = begin(encoder, "raster.layer0");
+                self.raster.encode(
+                    device,
+                    &mut pass,
+                    scene,
+                    RasterMode::Layer0,
+                    &targets(Some(vis0), None, None),
+                );
+            }
+            if s.layers == 2 {
+                let mut pass = begin(encoder, "raster.layer1");
+                let t = targets(None, Some(&self.vis1), Some(vis0));
+                self.raster.encode(device, &mut pass, scene, RasterMode::Layer1, &t);
+            }
+        }
+        {
+            let mut pass = begin(encoder, "resolve");
+            let layers = [vis0, &self.vis1];
+            for (layer, vis) in layers.iter().enumerate().take(s.layers as usize) {
+                self.resolve.encode(
+                    device,
+                    &mut pass,
+                    scene,
+                    &self.frame,
+                    vis,
+                    &self.gbuffer[layer],
+                    s.width,
+                    s.height,
+                );
+            }
+        }
+        if let Some(t) = &self.timestamps {
+            t.resolve(encoder);
+        }
+        self.passes = passes;
+        self.last = write;
+        self.history = Some(current);
+        Ok(())
+    }
+
+    /// Encodes and submits one frame on `queue`.
+    pub fn render(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        camera: &Camera,
+    ) -> Result<()> {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("deep-gbuffer.frame"),
+        });
+        self.encode(device, queue, &mut encoder, scene, camera)?;
+        queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// Per-pass GPU times of the last submitted frame (empty without `TIMESTAMP_QUERY`).
+    pub fn timings(&self, device: &wgpu::Device) -> Result<Vec<PassTiming>> {
+        match &self.timestamps {
+            Some(t) => t.read(device),
+            None => Ok(Vec::new()),
+        }
+    }
+
+    /// The visibility buffer of `layer` (0 or 1): `u64` words `(depth bits << 32) | triangle id`.
+    pub fn visibility_buffer(&self, layer: usize) -> &wgpu::Buffer {
+        if layer == 0 { &self.vis0[self.last] } else { &self.vis1 }
+    }
+
+    /// The G-buffer of `layer` (layout in `wgsl/shared/gbuffer.wgsl`).
+    pub fn gbuffer_buffer(&self, layer: usize) -> &wgpu::Buffer {
+        &self.gbuffer[layer.min(1)]
+    }
+
+    /// Reads a visibility buffer back (waits for the GPU).
+    pub fn read_visibility(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        layer: usize,
+    ) -> Result<Vec<u64>> {
+        let bytes = gpu::read_buffer(device, queue, self.visibility_buffer(layer))?;
+        let n = (self.settings.width * self.settings.height) as usize;
+        Ok(bytemuck::pod_collect_to_vec::<u8, u64>(&bytes[..n * 8]))
+    }
+
+    /// Reads and decodes a G-buffer layer (waits for the GPU).
+    pub fn read_gbuffer(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        layer: usize,
+    ) -> Result<GBufferLayer> {
+        let bytes = gpu::read_buffer(device, queue, self.gbuffer_buffer(layer))?;
+        Ok(GBufferLayer::decode(
+            &bytes,
+            self.settings.width,
+            self.settings.height,
+            self.settings.precision,
+        ))
+    }
+
+    /// Reads the raster counters of the last frame (waits for the GPU).
+    pub fn diagnostics(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Diagnostics> {
+        let bytes = gpu::read_buffer(device, queue, &self.bins)?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes[..16]);
+        Ok(Diagnostics { large_triangles: w[3], dropped_triangles: w[1] })
+    }
+}

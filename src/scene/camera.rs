@@ -1,0 +1,139 @@
+//! Cameras: perspective (standard, reverse-Z, infinite far) and orthographic.
+//!
+//! The visibility buffer stores **view depth** (distance along the viewing axis, positive in front
+//! of the camera), not NDC depth, so reverse-Z and an infinite far plane change the projection
+//! matrix but not which surface is visible.
+
+use glam::camera::rh::proj::directx;
+use glam::camera::rh::view::look_at_mat4;
+use glam::{Mat4, Vec3};
+
+/// How a camera projects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// A perspective projection.
+    Perspective {
+        /// Vertical field of view in degrees.
+        fov_y_deg: f32,
+        /// Near plane distance (> 0).
+        near: f32,
+        /// Far plane distance; `None` for an infinite far plane.
+        far: Option<f32>,
+        /// Depth 1 at the near plane and 0 at the far plane.
+        reverse_z: bool,
+    },
+    /// An orthographic projection.
+    Orthographic {
+        /// Height of the view volume in scene units.
+        height: f32,
+        /// Near plane distance (may be negative).
+        near: f32,
+        /// Far plane distance.
+        far: f32,
+    },
+}
+
+/// A camera: where it is, where it looks, and how it projects.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Projection.
+    pub projection: Projection,
+}
+
+impl Camera {
+    /// A perspective camera with an infinite far plane.
+    pub fn perspective(eye: Vec3, target: Vec3, fov_y_deg: f32, near: f32) -> Camera {
+        Camera {
+            eye,
+            target,
+            up: Vec3::Y,
+            projection: Projection::Perspective { fov_y_deg, near, far: None, reverse_z: false },
+        }
+    }
+
+    /// The view matrix (world to view space, right-handed, looking down -z).
+    pub fn view(&self) -> Mat4 {
+        let forward = self.target - self.eye;
+        // Pick another up vector when looking straight along `up`.
+        let up = if forward.cross(self.up).length_squared() < 1e-12 * forward.length_squared() {
+            if self.up.abs().dot(Vec3::Z) > 0.9 { Vec3::X } else { Vec3::Z }
+        } else {
+            self.up
+        };
+        look_at_mat4(self.eye, self.target, up)
+    }
+
+    /// The projection matrix for a width/height ratio (wgpu clip conventions, depth in [0, 1]).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        match self.projection {
+            Projection::Perspective { fov_y_deg, near, far, reverse_z } => {
+                let fov = fov_y_deg.to_radians();
+                match (far, reverse_z) {
+                    (None, false) => directx::perspective_infinite(fov, aspect, near),
+                    (None, true) => directx::perspective_infinite_reverse(fov, aspect, near),
+                    (Some(far), false) => directx::perspective(fov, aspect, near, far),
+                    (Some(far), true) => directx::perspective(fov, aspect, far, near),
+                }
+            }
+            Projection::Orthographic { height, near, far } => {
+                let h = height * 0.5;
+                let w = h * aspect;
+                directx::orthographic(-w, w, -h, h, near, far)
+            }
+        }
+    }
+
+    /// Near and far view depths (`far` is `f32::MAX` for an infinite far plane).
+    pub fn depth_range(&self) -> (f32, f32) {
+        match self.projection {
+            Projection::Perspective { near, far, .. } => (near, far.unwrap_or(f32::MAX)),
+            Projection::Orthographic { near, far, .. } => (near, far),
+        }
+    }
+
+    /// Whether the projection is orthographic.
+    pub fn is_orthographic(&self) -> bool {
+        matches!(self.projection, Projection::Orthographic { .. })
+    }
+
+    /// Checks that the camera can produce an image.
+    pub fn validate(&self) -> crate::Result<()> {
+        let bad = |m: &str| Err(crate::Error::setting("camera", m.to_string()));
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return bad("eye, target and up must be finite");
+        }
+        if (self.target - self.eye).length_squared() == 0.0 {
+            return bad("eye and target coincide");
+        }
+        match self.projection {
+            Projection::Perspective { fov_y_deg, near, far, .. } => {
+                if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+                    return bad("field of view must be in (0, 180) degrees");
+                }
+                if !(near > 0.0 && near.is_finite()) {
+                    return bad("near must be positive and finite");
+                }
+                if let Some(far) = far {
+                    if !(far > near && far.is_finite()) {
+                        return bad("far must be finite and beyond near");
+                    }
+                }
+            }
+            Projection::Orthographic { height, near, far } => {
+                if !(height > 0.0 && height.is_finite()) {
+                    return bad("orthographic height must be positive");
+                }
+                if !(far > near && near.is_finite() && far.is_finite()) {
+                    return bad("far must be finite and beyond near");
+                }
+            }
+        }
+        Ok(())
+    }
+}

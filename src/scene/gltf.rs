@@ -1,0 +1,256 @@
+//! glTF 2.0 (`.gltf` and `.glb`, via the `gltf` crate): node transforms, every mesh and
+//! primitive, metallic-roughness materials with base-colour textures, `KHR_lights_punctual`,
+//! `KHR_materials_emissive_strength` and the first camera.
+//!
+//! Mirror reflectivity, which glTF does not have, is derived as `metallic * (1 - roughness)`.
+
+use std::path::Path;
+
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use gltf::khr_lights_punctual::Kind;
+use gltf::mesh::Mode;
+
+use super::{
+    Camera, Light, LightKind, MAX_TEXTURE_SIDE, Material, MeshData, Projection, Scene, Texture,
+};
+use crate::{Error, Result};
+
+/// Loads a `.gltf` or `.glb` file with its buffers and images.
+pub fn load(path: &Path) -> Result<Scene> {
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| match e {
+        gltf::Error::Io(io) => Error::io(path, io),
+        other => Error::format(path, "glTF", other.to_string()),
+    })?;
+    let mut scene = Scene::default();
+    let mut image_textures: Vec<Option<u32>> = vec![None; images.len()];
+    for m in doc.materials() {
+        let name =
+            m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_owned);
+        let pbr = m.pbr_metallic_roughness();
+        let base_color_texture = match pbr.base_color_texture() {
+            Some(info) => {
+                let image = info.texture().source().index();
+                let data = images.get(image).ok_or_else(|| {
+                    Error::format(
+                        path,
+                        format!("materials[`{name}`]"),
+                        format!("image {image} missing"),
+                    )
+                })?;
+                if image_textures[image].is_none() {
+                    let tex = convert_image(data)
+                        .map_err(|m| Error::format(path, format!("images[{image}]"), m))?;
+                    scene.textures.push(tex);
+                    image_textures[image] = Some(scene.textures.len() as u32 - 1);
+                }
+                image_textures[image]
+            }
+            None => None,
+        };
+        let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+        let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+        scene.materials.push(Material {
+            name,
+            base_color: Vec4::from(pbr.base_color_factor()),
+            base_color_texture,
+            emissive: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            roughness,
+            metallic,
+            reflectivity: metallic * (1.0 - roughness),
+            double_sided: m.double_sided(),
+        });
+    }
+    let default_material = scene.materials.len() as u32;
+    let mut used_default = false;
+
+    let Some(gscene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+        return Err(Error::format(path, "scenes", "the file has no scene"));
+    };
+    let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        stack.extend(node.children().map(|c| (c, world)));
+        if let Some(mesh) = node.mesh() {
+            let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+            for prim in mesh.primitives() {
+                let location = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                let positions: Vec<Vec3> = reader
+                    .read_positions()
+                    .ok_or_else(|| Error::format(path, &location, "no POSITION attribute"))?
+                    .map(|p| world.transform_point3(Vec3::from(p)))
+                    .collect();
+                let normals: Vec<Vec3> = reader
+                    .read_normals()
+                    .map(|it| {
+                        it.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()).collect()
+                    })
+                    .unwrap_or_default();
+                let uvs: Vec<Vec2> = reader
+                    .read_tex_coords(0)
+                    .map(|t| t.into_f32().map(Vec2::from).collect())
+                    .unwrap_or_default();
+                let raw: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..positions.len() as u32).collect(),
+                };
+                let indices = match prim.mode() {
+                    Mode::Triangles => raw,
+                    Mode::TriangleStrip => (2..raw.len())
+                        .flat_map(|i| {
+                            if i % 2 == 0 {
+                                [raw[i - 2], raw[i - 1], raw[i]]
+                            } else {
+                                [raw[i - 1], raw[i - 2], raw[i]]
+                            }
+                        })
+                        .collect(),
+                    Mode::TriangleFan => {
+                        (2..raw.len()).flat_map(|i| [raw[0], raw[i - 1], raw[i]]).collect()
+                    }
+                    other => {
+                        scene.warnings.push(format!(
+                            "{location}: {other:?} primitive skipped (not triangles)"
+                        ));
+                        continue;
+                    }
+                };
+                let material = match prim.material().index() {
+                    Some(i) => i as u32,
+                    None => {
+                        used_default = true;
+                        default_material
+                    }
+                };
+                // A mirroring transform flips the winding.
+                let indices = if world.determinant() < 0.0 {
+                    indices.chunks_exact(3).flat_map(|t| [t[0], t[2], t[1]]).collect()
+                } else {
+                    indices
+                };
+                scene
+                    .push_mesh(MeshData {
+                        positions: &positions,
+                        normals: &normals,
+                        uvs: &uvs,
+                        indices: &indices,
+                        material,
+                    })
+                    .map_err(|e| Error::format(path, &location, e.to_string()))?;
+            }
+        }
+        if let Some(light) = node.light() {
+            let position = world.transform_point3(Vec3::ZERO);
+            let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+            let kind = match light.kind() {
+                Kind::Directional => LightKind::Directional { direction },
+                Kind::Point => LightKind::Point { position, range: light.range() },
+                Kind::Spot { inner_cone_angle, outer_cone_angle } => LightKind::Spot {
+                    position,
+                    direction,
+                    range: light.range(),
+                    inner_cone: inner_cone_angle,
+                    outer_cone: outer_cone_angle,
+                },
+            };
+            scene.lights.push(Light {
+                name: light.name().map_or_else(|| format!("light{}", light.index()), str::to_owned),
+                kind,
+                color: Vec3::from(light.color()),
+                intensity: light.intensity(),
+                casts_shadows: true,
+            });
+        }
+        if let (Some(cam), None) = (node.camera(), &scene.camera) {
+            let eye = world.transform_point3(Vec3::ZERO);
+            let forward = world.transform_vector3(Vec3::NEG_Z);
+            let up = world.transform_vector3(Vec3::Y);
+            let projection = match cam.projection() {
+                gltf::camera::Projection::Perspective(p) => Projection::Perspective {
+                    fov_y_deg: p.yfov().to_degrees(),
+                    near: p.znear(),
+                    far: p.zfar(),
+                    reverse_z: false,
+                },
+                gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+                    height: 2.0 * o.ymag(),
+                    near: o.znear(),
+                    far: o.zfar(),
+                },
+            };
+            scene.camera = Some(Camera { eye, target: eye + forward, up, projection });
+        }
+    }
+    if used_default {
+        scene.materials.push(Material::default());
+    }
+    Ok(scene)
+}
+
+fn check_side(width: u32, height: u32) -> std::result::Result<(), String> {
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(format!(
+            "texture is {width}x{height}, larger than the {MAX_TEXTURE_SIDE} texel limit"
+        ));
+    }
+    if width == 0 || height == 0 {
+        return Err("texture has zero size".into());
+    }
+    Ok(())
+}
+
+fn convert_image(data: &gltf::image::Data) -> std::result::Result<Texture, String> {
+    use gltf::image::Format as F;
+    check_side(data.width, data.height)?;
+    let p = &data.pixels;
+    let u16s = |i: usize| (u16::from_le_bytes([p[2 * i], p[2 * i + 1]]) >> 8) as u8;
+    let f32s = |i: usize| {
+        let v = f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
+        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    };
+    let n = (data.width * data.height) as usize;
+    let (channels, get): (usize, &dyn Fn(usize) -> u8) = match data.format {
+        F::R8 => (1, &|i| p[i]),
+        F::R8G8 => (2, &|i| p[i]),
+        F::R8G8B8 => (3, &|i| p[i]),
+        F::R8G8B8A8 => (4, &|i| p[i]),
+        F::R16 => (1, &u16s),
+        F::R16G16 => (2, &u16s),
+        F::R16G16B16 => (3, &u16s),
+        F::R16G16B16A16 => (4, &u16s),
+        F::R32G32B32FLOAT => (3, &f32s),
+        F::R32G32B32A32FLOAT => (4, &f32s),
+    };
+    let bytes_per = p.len() / n.max(1) / channels;
+    if p.len() < n * channels * bytes_per || bytes_per == 0 {
+        return Err(format!(
+            "image data holds {} bytes, too few for {}x{}",
+            p.len(),
+            data.width,
+            data.height
+        ));
+    }
+    let mut rgba8 = Vec::with_capacity(n * 4);
+    for i in 0..n {
+        let c = |k: usize| get(i * channels + k);
+        rgba8.extend_from_slice(&match channels {
+            1 => [c(0), c(0), c(0), 255],
+            2 => [c(0), c(0), c(0), c(1)],
+            3 => [c(0), c(1), c(2), 255],
+            _ => [c(0), c(1), c(2), c(3)],
+        });
+    }
+    Ok(Texture { width: data.width, height: data.height, rgba8 })
+}
+
+/// Loads an image file (PNG or JPEG) as an sRGB RGBA8 texture, refusing oversized images.
+pub(crate) fn load_texture_file(path: &Path) -> Result<Texture> {
+    let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
+    let reader = reader.with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let (w, h) =
+        reader.into_dimensions().map_err(|e| Error::format(path, "image header", e.to_string()))?;
+    check_side(w, h).map_err(|m| Error::format(path, "image", m))?;
+    let img = image::open(path).map_err(|e| Error::format(path, "image", e.to_string()))?;
+    let rgba = img.to_rgba8();
+    Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+}

@@ -1,0 +1,329 @@
+//! The CPU scene model: one flattened triangle list with per-triangle materials, lights and a
+//! camera. Loaders ([`gltf`], [`obj`]) and built-in scenes ([`builtin`]) produce it; [`upload`]
+//! turns it into [`SceneBuffers`](crate::SceneBuffers) on the GPU.
+
+pub mod builtin;
+pub mod camera;
+pub mod gltf;
+pub mod obj;
+pub mod upload;
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3, Vec4};
+
+pub use camera::{Camera, Projection};
+
+use crate::{Error, Result};
+
+/// Largest texture side accepted from a scene file.
+pub const MAX_TEXTURE_SIDE: u32 = 8192;
+
+/// A surface material (metallic-roughness model).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name from the file, for messages.
+    pub name: String,
+    /// Linear base colour (rgb) and opacity (a).
+    pub base_color: Vec4,
+    /// Index into [`Scene::textures`] of the base-colour texture (sRGB encoded), if any.
+    pub base_color_texture: Option<u32>,
+    /// Emitted radiance, linear rgb.
+    pub emissive: Vec3,
+    /// Perceptual roughness in [0, 1].
+    pub roughness: f32,
+    /// Metalness in [0, 1].
+    pub metallic: f32,
+    /// Mirror reflectivity in [0, 1] (how much a screen-space reflection contributes).
+    pub reflectivity: f32,
+    /// Both faces are visible; otherwise back faces are culled.
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+            base_color_texture: None,
+            emissive: Vec3::ZERO,
+            roughness: 0.8,
+            metallic: 0.0,
+            reflectivity: 0.0,
+            double_sided: false,
+        }
+    }
+}
+
+/// An RGBA8 texture, sRGB encoded, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width * height * 4` bytes.
+    pub rgba8: Vec<u8>,
+}
+
+/// What kind of light, with its geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Parallel light travelling along `direction`.
+    Directional {
+        /// Direction the light travels (from the light into the scene).
+        direction: Vec3,
+    },
+    /// Light from a point, fading to zero at `range` (infinite when `None`).
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Range.
+        range: Option<f32>,
+    },
+    /// A cone of light.
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Direction the cone points.
+        direction: Vec3,
+        /// Range.
+        range: Option<f32>,
+        /// Inner cone angle in radians (full intensity inside).
+        inner_cone: f32,
+        /// Outer cone angle in radians (zero outside).
+        outer_cone: f32,
+    },
+}
+
+/// A punctual light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// Name, for timings (`shadow.<name>`) and messages.
+    pub name: String,
+    /// Kind and geometry.
+    pub kind: LightKind,
+    /// Linear colour.
+    pub color: Vec3,
+    /// Intensity (lux for directional, candela for point and spot, as in glTF).
+    pub intensity: f32,
+    /// Whether the light casts shadows (gets a shadow map).
+    pub casts_shadows: bool,
+}
+
+/// A whole scene: triangles, materials, textures, lights and an optional camera.
+///
+/// Vertex attributes are parallel arrays (`normals` and `uvs` have one entry per position; a
+/// zero normal means "use the face normal"). Triangles index them; each triangle has a material.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    /// Object-space = world-space vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex normals (zero where the file has none).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates (zero where the file has none).
+    pub uvs: Vec<Vec2>,
+    /// Triangles, three vertex indices each.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index of each triangle.
+    pub triangle_materials: Vec<u32>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Textures referenced by materials.
+    pub textures: Vec<Texture>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// Sky / ambient radiance, linear rgb.
+    pub ambient: Vec3,
+    /// The scene's own camera, if it has one.
+    pub camera: Option<Camera>,
+    /// What a loader skipped (for example a line primitive), for the user to see.
+    pub warnings: Vec<String>,
+}
+
+/// One mesh to append with [`Scene::push_mesh`].
+pub struct MeshData<'a> {
+    /// Positions (already in world space).
+    pub positions: &'a [Vec3],
+    /// Normals, empty or one per position.
+    pub normals: &'a [Vec3],
+    /// Texture coordinates, empty or one per position.
+    pub uvs: &'a [Vec2],
+    /// Triangle indices into this mesh's own vertices.
+    pub indices: &'a [u32],
+    /// Material of every triangle.
+    pub material: u32,
+}
+
+impl Scene {
+    /// Loads a scene file by extension (`.gltf`, `.glb`, `.obj`).
+    pub fn load(path: &Path) -> Result<Scene> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("gltf" | "glb") => gltf::load(path),
+            Some("obj") => obj::load(path),
+            _ => Err(Error::format(
+                path,
+                "file name",
+                "unknown scene format (expected .gltf, .glb or .obj)",
+            )),
+        }
+    }
+
+    /// Loads `builtin:NAME` or a file path.
+    pub fn from_spec(spec: &str) -> Result<Scene> {
+        match spec.strip_prefix("builtin:") {
+            Some(name) => builtin::by_name(name),
+            None => Scene::load(Path::new(spec)),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Appends a mesh; missing normals and uvs become zero.
+    pub fn push_mesh(&mut self, mesh: MeshData<'_>) -> Result<()> {
+        let base = u32::try_from(self.positions.len())
+            .map_err(|_| Error::InvalidScene("more than 2^32 vertices".into()))?;
+        let n = mesh.positions.len();
+        if mesh.indices.len() % 3 != 0 {
+            return Err(Error::InvalidScene(format!(
+                "index count {} is not a multiple of 3",
+                mesh.indices.len()
+            )));
+        }
+        if let Some(bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(Error::InvalidScene(format!(
+                "index {bad} out of range for a mesh of {n} vertices"
+            )));
+        }
+        self.positions.extend_from_slice(mesh.positions);
+        if mesh.normals.len() == n {
+            self.normals.extend_from_slice(mesh.normals);
+        } else {
+            self.normals.extend(std::iter::repeat_n(Vec3::ZERO, n));
+        }
+        if mesh.uvs.len() == n {
+            self.uvs.extend_from_slice(mesh.uvs);
+        } else {
+            self.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n));
+        }
+        for t in mesh.indices.chunks_exact(3) {
+            self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
+            self.triangle_materials.push(mesh.material);
+        }
+        Ok(())
+    }
+
+    /// Axis-aligned bounds of all positions (`None` for an empty scene).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.positions.iter().filter(|p| p.is_finite());
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+    }
+
+    /// A camera looking at the scene's bounds from the front (+z), slightly above.
+    pub fn framing_camera(&self) -> Camera {
+        let (lo, hi) = self.bounds().unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        let center = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let fov_y: f32 = 45.0;
+        let dist = radius / (fov_y.to_radians() * 0.5).sin();
+        let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
+        Camera::perspective(
+            center + dir * dist,
+            center,
+            fov_y,
+            (dist - radius).max(dist * 1e-3) * 0.5,
+        )
+    }
+
+    /// The scene's camera, or one that frames its bounds.
+    pub fn camera_or_default(&self) -> Camera {
+        self.camera.clone().unwrap_or_else(|| self.framing_camera())
+    }
+
+    /// Adds the default lighting (a sun and a sky ambient) when the scene has no light.
+    pub fn ensure_lights(&mut self) {
+        if self.lights.is_empty() {
+            self.lights.push(Light {
+                name: "sun".into(),
+                kind: LightKind::Directional { direction: Vec3::new(-0.4, -1.0, -0.3).normalize() },
+                color: Vec3::ONE,
+                intensity: 3.0,
+                casts_shadows: true,
+            });
+            if self.ambient == Vec3::ZERO {
+                self.ambient = Vec3::new(0.25, 0.3, 0.4);
+            }
+        }
+    }
+
+    /// Checks what the GPU passes rely on: a non-empty scene, indices and material ids in range,
+    /// finite positions, texture references in range and texture sizes that match their data.
+    pub fn validate(&self) -> Result<()> {
+        if self.triangles.is_empty() {
+            return Err(Error::InvalidScene("the scene has no triangles".into()));
+        }
+        let n = self.positions.len();
+        if self.normals.len() != n || self.uvs.len() != n {
+            return Err(Error::InvalidScene(format!(
+                "{n} positions but {} normals and {} uvs",
+                self.normals.len(),
+                self.uvs.len()
+            )));
+        }
+        if self.triangle_materials.len() != self.triangles.len() {
+            return Err(Error::InvalidScene(format!(
+                "{} triangles but {} triangle materials",
+                self.triangles.len(),
+                self.triangle_materials.len()
+            )));
+        }
+        if let Some((i, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(Error::InvalidScene(format!("position {i} is not finite: {p}")));
+        }
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(Error::InvalidScene(format!(
+                    "triangle {t} uses vertex {bad} but there are {n} vertices"
+                )));
+            }
+        }
+        if let Some((t, &m)) = self
+            .triangle_materials
+            .iter()
+            .enumerate()
+            .find(|(_, m)| **m as usize >= self.materials.len())
+        {
+            return Err(Error::InvalidScene(format!(
+                "triangle {t} uses material {m} but there are {} materials",
+                self.materials.len()
+            )));
+        }
+        for m in &self.materials {
+            if let Some(t) = m.base_color_texture {
+                if t as usize >= self.textures.len() {
+                    return Err(Error::InvalidScene(format!(
+                        "material `{}` uses texture {t} but there are {} textures",
+                        m.name,
+                        self.textures.len()
+                    )));
+                }
+            }
+        }
+        for (i, t) in self.textures.iter().enumerate() {
+            if t.width == 0 || t.height == 0 || t.rgba8.len() != (t.width * t.height * 4) as usize {
+                return Err(Error::InvalidScene(format!(
+                    "texture {i} is {}x{} with {} bytes",
+                    t.width,
+                    t.height,
+                    t.rgba8.len()
+                )));
+            }
+        }
+        Ok(())
+    }
+}

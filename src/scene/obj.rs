@@ -1,0 +1,175 @@
+//! Wavefront OBJ with MTL materials (via `tobj`). `Kd` is the base colour, `map_Kd` its texture,
+//! `Ke` the emission, `Ns` the glossiness (turned into roughness) and `Ks` the mirror reflectivity.
+
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::{Material, MeshData, Scene, Texture};
+use crate::{Error, Result};
+
+/// Loads an OBJ file and the MTL libraries it names (paths relative to the OBJ's folder).
+pub fn load(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mtl_dir = dir.clone();
+    parse(&text, path, &dir, move |mtl: &Path| {
+        let full = mtl_dir.join(mtl);
+        let text = std::fs::read_to_string(&full).map_err(|e| Error::io(&full, e))?;
+        Ok((text, full))
+    })
+}
+
+/// Parses OBJ text; `load_mtl` returns an MTL library's text and the path used in messages.
+pub(crate) fn parse(
+    text: &str,
+    path: &Path,
+    dir: &Path,
+    load_mtl: impl Fn(&Path) -> Result<(String, PathBuf)>,
+) -> Result<Scene> {
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let mtl_error: std::cell::RefCell<Option<Error>> = std::cell::RefCell::new(None);
+    let loaded = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, |mtl| {
+        let (mtl_text, mtl_path) = match load_mtl(mtl) {
+            Ok(found) => found,
+            Err(e) => {
+                *mtl_error.borrow_mut() = Some(e);
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
+        };
+        let parsed = tobj::load_mtl_buf(&mut BufReader::new(mtl_text.as_bytes()));
+        if let Err(e) = &parsed {
+            let line = locate_error(&mtl_text, e);
+            *mtl_error.borrow_mut() = Some(Error::format(&mtl_path, line, e.to_string()));
+        }
+        parsed
+    });
+    let (models, materials) = match loaded {
+        Ok(found) => found,
+        Err(e) => {
+            return Err(mtl_error
+                .take()
+                .unwrap_or_else(|| Error::format(path, locate_error(text, &e), e.to_string())));
+        }
+    };
+    if let Some(e) = mtl_error.take() {
+        return Err(e);
+    }
+    let materials = materials.map_err(|e| Error::format(path, "mtllib", e.to_string()))?;
+
+    let mut scene = Scene::default();
+    for m in &materials {
+        scene.materials.push(convert_material(m, dir, &mut scene.textures)?);
+    }
+    let default_material = scene.materials.len() as u32;
+    let mut used_default = false;
+    for model in &models {
+        let mesh = &model.mesh;
+        let positions: Vec<Vec3> =
+            mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        let normals: Vec<Vec3> =
+            mesh.normals.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        let uvs: Vec<Vec2> =
+            mesh.texcoords.chunks_exact(2).map(|p| Vec2::new(p[0], 1.0 - p[1])).collect();
+        let material = match mesh.material_id {
+            Some(id) if id < materials.len() => id as u32,
+            _ => {
+                used_default = true;
+                default_material
+            }
+        };
+        scene
+            .push_mesh(MeshData {
+                positions: &positions,
+                normals: &normals,
+                uvs: &uvs,
+                indices: &mesh.indices,
+                material,
+            })
+            .map_err(|e| Error::format(path, format!("object `{}`", model.name), e.to_string()))?;
+    }
+    if used_default {
+        scene.materials.push(Material::default());
+    }
+    Ok(scene)
+}
+
+fn convert_material(
+    m: &tobj::Material,
+    dir: &Path,
+    textures: &mut Vec<Texture>,
+) -> Result<Material> {
+    let kd = m.diffuse.unwrap_or([0.8; 3]);
+    let ks = m.specular.unwrap_or([0.0; 3]);
+    let ke = m.emissive.unwrap_or([0.0; 3]);
+    // Blinn-Phong exponent to perceptual roughness: alpha = sqrt(2 / (Ns + 2)), roughness = sqrt(alpha).
+    let roughness = m.shininess.map_or(0.8, |ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt().sqrt());
+    let base_color_texture = match &m.diffuse_texture {
+        Some(name) => {
+            textures.push(super::gltf::load_texture_file(&dir.join(name))?);
+            Some(textures.len() as u32 - 1)
+        }
+        None => None,
+    };
+    Ok(Material {
+        name: m.name.clone(),
+        base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
+        base_color_texture,
+        emissive: Vec3::from(ke),
+        roughness,
+        metallic: 0.0,
+        reflectivity: ks[0].max(ks[1]).max(ks[2]).clamp(0.0, 1.0),
+        double_sided: true,
+    })
+}
+
+/// Finds the line that `tobj` refused, so the message can name it (`line N`).
+fn locate_error(text: &str, err: &tobj::LoadError) -> String {
+    use tobj::LoadError as E;
+    let floats = |rest: &str, min: usize| {
+        let parts: Vec<&str> = rest.split_whitespace().collect();
+        parts.len() >= min && parts.iter().all(|p| p.parse::<f32>().is_ok())
+    };
+    let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let bad = match (key, err) {
+            ("v", E::PositionParseError) => !floats(rest, 3),
+            ("vn", E::NormalParseError) => !floats(rest, 3),
+            ("vt", E::TexcoordParseError) => !floats(rest, 1),
+            ("Kd" | "Ka" | "Ks" | "Ke" | "Ns" | "d" | "Ni", E::MaterialParseError) => {
+                !floats(rest, 1)
+            }
+            ("f", E::FaceParseError | E::InvalidPolygon) => {
+                rest.split_whitespace().count() < 3
+                    || rest
+                        .split_whitespace()
+                        .any(|v| v.split('/').next().is_none_or(|i| i.parse::<i64>().is_err()))
+            }
+            (
+                "f",
+                E::FaceVertexOutOfBounds | E::FaceTexCoordOutOfBounds | E::FaceNormalOutOfBounds,
+            ) => rest.split_whitespace().any(|v| {
+                v.split('/').zip([nv, nt, nn]).any(|(s, n)| match s.parse::<i64>() {
+                    Ok(k) if k > 0 => k > n,
+                    Ok(k) if k < 0 => -k > n,
+                    Ok(_) => true,
+                    Err(_) => false,
+                })
+            }),
+            _ => false,
+        };
+        if bad {
+            return format!("line {}", i + 1);
+        }
+        match key {
+            "v" => nv += 1,
+            "vt" => nt += 1,
+            "vn" => nn += 1,
+            _ => {}
+        }
+    }
+    "file".into()
+}

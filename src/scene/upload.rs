@@ -1,0 +1,237 @@
+//! The scene on the GPU: [`SceneBuffers`], uploaded from a [`Scene`] or imported from a host
+//! engine's own buffers without a copy.
+//!
+//! Byte layouts (all little-endian, tightly packed, storage-buffer usage):
+//!
+//! | buffer | layout |
+//! |---|---|
+//! | positions | `f32 x 3` per vertex |
+//! | normals | `f32 x 3` per vertex (zero: use the face normal) |
+//! | uvs | `f32 x 2` per vertex |
+//! | indices | `u32 x 3` per triangle |
+//! | triangle_materials | `u32` per triangle |
+//! | materials | [`GpuMaterial`] (64 bytes) per material |
+//! | texels | `u32` RGBA8 (sRGB, red in the low byte) per texel, all textures back to back |
+
+use bytemuck::{Pod, Zeroable};
+
+use super::Scene;
+use crate::gpu::storage_buffer_init;
+use crate::{Error, Result};
+
+/// A material as the kernels read it. Mirrors `struct Material` in `wgsl/shared/material.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct GpuMaterial {
+    /// Linear base colour and opacity.
+    pub base_color: [f32; 4],
+    /// Emitted radiance.
+    pub emissive: [f32; 3],
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Metalness.
+    pub metallic: f32,
+    /// Mirror reflectivity.
+    pub reflectivity: f32,
+    /// Bit 0: double-sided; bit 1: textured.
+    pub flags: u32,
+    /// First texel of the base-colour texture in the texel buffer.
+    pub texture_offset: u32,
+    /// Texture width (0 without a texture).
+    pub texture_width: u32,
+    /// Texture height.
+    pub texture_height: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 64);
+
+/// [`GpuMaterial::flags`] bit: both faces visible.
+pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
+/// [`GpuMaterial::flags`] bit: has a base-colour texture.
+pub const MATERIAL_TEXTURED: u32 = 2;
+
+/// The host engine's own buffers, for [`SceneBuffers::import`]. Each needs `STORAGE` usage and
+/// the byte layout in this module's documentation.
+#[derive(Clone, Debug)]
+pub struct ImportedBuffers {
+    /// Positions.
+    pub positions: wgpu::Buffer,
+    /// Normals.
+    pub normals: wgpu::Buffer,
+    /// Texture coordinates.
+    pub uvs: wgpu::Buffer,
+    /// Indices.
+    pub indices: wgpu::Buffer,
+    /// Per-triangle material ids.
+    pub triangle_materials: wgpu::Buffer,
+    /// Materials.
+    pub materials: wgpu::Buffer,
+    /// Texels (a 16-byte buffer when there are no textures).
+    pub texels: wgpu::Buffer,
+    /// Vertices in the buffers.
+    pub vertex_count: u32,
+    /// Triangles in the buffers.
+    pub triangle_count: u32,
+    /// Materials in the buffer.
+    pub material_count: u32,
+}
+
+/// A scene's geometry and materials on the GPU.
+#[derive(Clone, Debug)]
+pub struct SceneBuffers {
+    pub(crate) b: ImportedBuffers,
+}
+
+/// Triangles above this count cannot be addressed by the large-triangle bin (3 bits per entry
+/// name the clipped sub-triangle).
+pub const MAX_TRIANGLES: u32 = 1 << 29;
+
+impl SceneBuffers {
+    /// Validates `scene` and uploads it.
+    pub fn upload(device: &wgpu::Device, scene: &Scene) -> Result<SceneBuffers> {
+        scene.validate()?;
+        let limits = device.limits();
+        let mut texels: Vec<u32> = Vec::new();
+        let mut materials = Vec::with_capacity(scene.materials.len());
+        for m in &scene.materials {
+            let mut g = GpuMaterial {
+                base_color: m.base_color.to_array(),
+                emissive: m.emissive.to_array(),
+                roughness: m.roughness,
+                metallic: m.metallic,
+                reflectivity: m.reflectivity,
+                flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+                ..GpuMaterial::default()
+            };
+            if let Some(t) = m.base_color_texture {
+                let tex = &scene.textures[t as usize];
+                g.flags |= MATERIAL_TEXTURED;
+                g.texture_offset = texels.len() as u32;
+                g.texture_width = tex.width;
+                g.texture_height = tex.height;
+                texels.extend(
+                    tex.rgba8.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+                );
+            }
+            materials.push(g);
+        }
+        let positions: Vec<f32> = scene.positions.iter().flat_map(|p| p.to_array()).collect();
+        let normals: Vec<f32> = scene
+            .normals
+            .iter()
+            .flat_map(|n| if n.is_finite() { n.to_array() } else { [0.0; 3] })
+            .collect();
+        let uvs: Vec<f32> = scene
+            .uvs
+            .iter()
+            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 2] })
+            .collect();
+        let indices: Vec<u32> = scene.triangles.iter().flatten().copied().collect();
+        let check = |what: &str, bytes: usize| -> Result<()> {
+            let limit =
+                u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+            if bytes as u64 > limit {
+                return Err(Error::ExceedsLimit {
+                    what: format!("the scene's {what} buffer"),
+                    needed: bytes as u64,
+                    limit,
+                });
+            }
+            Ok(())
+        };
+        check("positions", positions.len() * 4)?;
+        check("indices", indices.len() * 4)?;
+        check("texels", texels.len() * 4)?;
+        let count = |n: usize, what: &str| {
+            u32::try_from(n)
+                .ok()
+                .filter(|&n| n < MAX_TRIANGLES)
+                .ok_or_else(|| Error::InvalidScene(format!("too many {what}: {n}")))
+        };
+        let b = ImportedBuffers {
+            positions: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.positions",
+                bytemuck::cast_slice(&positions),
+            ),
+            normals: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.normals",
+                bytemuck::cast_slice(&normals),
+            ),
+            uvs: storage_buffer_init(device, "deep-gbuffer.scene.uvs", bytemuck::cast_slice(&uvs)),
+            indices: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.indices",
+                bytemuck::cast_slice(&indices),
+            ),
+            triangle_materials: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.triangle_materials",
+                bytemuck::cast_slice(&scene.triangle_materials),
+            ),
+            materials: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.materials",
+                bytemuck::cast_slice(&materials),
+            ),
+            texels: storage_buffer_init(
+                device,
+                "deep-gbuffer.scene.texels",
+                bytemuck::cast_slice(&texels),
+            ),
+            vertex_count: count(scene.positions.len(), "vertices")?,
+            triangle_count: count(scene.triangles.len(), "triangles")?,
+            material_count: count(scene.materials.len(), "materials")?,
+        };
+        Ok(SceneBuffers { b })
+    }
+
+    /// Uses a host engine's buffers as they are (no copy), after checking their sizes and usage
+    /// against the counts. Index and material-id values are not checked here: the kernels
+    /// ignore triangles whose ids are out of range.
+    pub fn import(buffers: ImportedBuffers) -> Result<SceneBuffers> {
+        let b = &buffers;
+        if b.triangle_count == 0 {
+            return Err(Error::InvalidScene("the scene has no triangles".into()));
+        }
+        if b.triangle_count >= MAX_TRIANGLES {
+            return Err(Error::InvalidScene(format!("too many triangles: {}", b.triangle_count)));
+        }
+        let v = u64::from(b.vertex_count);
+        let t = u64::from(b.triangle_count);
+        let m = u64::from(b.material_count);
+        for (name, buffer, needed) in [
+            ("positions", &b.positions, v * 12),
+            ("normals", &b.normals, v * 12),
+            ("uvs", &b.uvs, v * 8),
+            ("indices", &b.indices, t * 12),
+            ("triangle_materials", &b.triangle_materials, t * 4),
+            ("materials", &b.materials, m * 64),
+            ("texels", &b.texels, 4),
+        ] {
+            if buffer.size() < needed {
+                return Err(Error::ImportedBuffer {
+                    name,
+                    message: format!("{} bytes, but the counts need {needed}", buffer.size()),
+                });
+            }
+            if !buffer.usage().contains(wgpu::BufferUsages::STORAGE) {
+                return Err(Error::ImportedBuffer { name, message: "lacks STORAGE usage".into() });
+            }
+        }
+        Ok(SceneBuffers { b: buffers })
+    }
+
+    /// The underlying buffers.
+    pub fn buffers(&self) -> &ImportedBuffers {
+        &self.b
+    }
+
+    /// Triangles.
+    pub fn triangle_count(&self) -> u32 {
+        self.b.triangle_count
+    }
+}

@@ -1,0 +1,16 @@
+// Fills a u32 buffer with one value (clears visibility buffers to empty).
+struct FillParams {
+    value: u32,
+    count: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: FillParams;
+@group(0) @binding(1) var<storage, read_write> data: array<u32>;
+
+@compute @workgroup_size(256)
+fn fill(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
+    let i = gid.x + gid.y * n.x * 256u;
+    if i < params.count {
+        data[i] = params.value;
+    }
+}

@@ -1,0 +1,365 @@
+// Software rasterization of both deep G-buffer layers into visibility buffers.
+// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 DEPTH_PHASE COUNT
+//
+// raster_small: one thread per input triangle: transform, clip against the near plane and the
+//   guard band (in homogeneous space), snap to 1/256-pixel fixed point, cull back faces, then
+//   rasterize triangles whose extent is at most SMALL_EXTENT pixels right here, and append the
+//   others to the large-triangle bin.
+// bin_args: turns the bin's count into indirect dispatch arguments.
+// raster_large: one 16x16 workgroup per (large triangle, slice): the slices walk the triangle's
+//   16x16 tiles, one pixel per thread, so a screen-filling triangle costs about its pixels.
+//
+// Coverage is exact: pixel centres are tested with integer edge functions (exact 64-bit for
+// large triangles) and the top-left rule, so adjacent triangles neither crack nor overlap.
+// src/cpu/raster.rs is the same algorithm on the CPU.
+//
+// Variants (defines): WRITE_L0 writes layer 0; WRITE_L1 writes layer 1, accepting a fragment
+// only if its view depth exceeds zref's depth + dz (zref: the final layer 0 for the two-pass
+// variant, the previous frame's layer 0 otherwise; REPROJECT compares at the fragment's
+// reprojected position in the previous frame). INT64 / DEPTH_PHASE: see shared/vis.wgsl.
+// COUNT counts every covered fragment instead (watertightness tests).
+
+#include "shared/frame.wgsl"
+#include "shared/material.wgsl"
+#include "shared/wide.wgsl"
+#include "shared/vis.wgsl"
+
+const SUBPIXEL: i32 = 256;
+const SMALL_EXTENT: i32 = 16;
+const LARGE_SLICES: u32 = 32u;
+const MAX_POLY: u32 = 9u;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+@group(0) @binding(2) var<storage, read> indices: array<u32>;
+@group(0) @binding(3) var<storage, read> tri_materials: array<u32>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+// [0]: large triangles binned since the last bin_args, [1]: large triangles dropped for lack of
+// room, [2]: entries for the current raster_large dispatch, [3]: large triangles this frame
+@group(0) @binding(5) var<storage, read_write> bins: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> large: array<u32>;
+@group(0) @binding(7) var<storage, read_write> args: array<u32>;
+#if WRITE_L0
+@group(0) @binding(8) var<storage, read_write> vis0: array<VisWord>;
+#endif
+#if WRITE_L1
+@group(0) @binding(9) var<storage, read_write> vis1: array<VisWord>;
+@group(0) @binding(10) var<storage, read> zref: array<u32>;
+#endif
+#if COUNT
+@group(0) @binding(11) var<storage, read_write> counts: array<atomic<u32>>;
+#endif
+
+// A clip-space vertex: (x, y, w, view depth).
+alias ClipVertex = vec4<f32>;
+
+struct Setup {
+    v0: vec2<i32>,
+    v1: vec2<i32>,
+    v2: vec2<i32>,
+    // d / w and 1 / w per vertex: view depth interpolates as sum(e r) / sum(e q).
+    r: vec3<f32>,
+    q: vec3<f32>,
+    // Pixel range covered (inclusive), already clamped to the viewport.
+    lo: vec2<i32>,
+    hi: vec2<i32>,
+    // 0: nothing to draw, 1: small, 2: large
+    kind: u32,
+}
+
+fn finite(x: f32) -> bool {
+    return abs(x) <= 3.0e38;
+}
+
+fn transform(vertex: u32) -> ClipVertex {
+    let p = vec4<f32>(positions[3u * vertex], positions[3u * vertex + 1u], positions[3u * vertex + 2u], 1.0);
+    let v = mat_mul(frame.view, p);
+    let c = mat_mul(frame.proj, v);
+    return vec4<f32>(c.x, c.y, c.w, -v.z);
+}
+
+fn plane_distance(plane: u32, v: ClipVertex) -> f32 {
+    switch plane {
+        case 0u: { return v.w - frame.near; }
+        case 1u: { return frame.guard_x * v.z - v.x; }
+        case 2u: { return frame.guard_x * v.z + v.x; }
+        case 3u: { return frame.guard_y * v.z - v.y; }
+        default: { return frame.guard_y * v.z + v.y; }
+    }
+}
+
+// Clips triangle t against the near plane and the guard band. Returns the polygon's vertex count
+// (0 when nothing is left); its fan (0, k + 1, k + 2) gives the sub-triangles.
+fn clip_triangle(t: u32, poly: ptr<function, array<ClipVertex, MAX_POLY>>) -> u32 {
+    (*poly)[0] = transform(indices[3u * t]);
+    (*poly)[1] = transform(indices[3u * t + 1u]);
+    (*poly)[2] = transform(indices[3u * t + 2u]);
+    var all_inside = true;
+    for (var i = 0u; i < 3u; i++) {
+        let v = (*poly)[i];
+        if !(finite(v.x) && finite(v.y) && finite(v.z) && finite(v.w)) {
+            return 0u;
+        }
+        for (var plane = 0u; plane < 5u; plane++) {
+            all_inside = all_inside && plane_distance(plane, v) >= 0.0;
+        }
+    }
+    if all_inside {
+        return 3u;
+    }
+    var n = 3u;
+    var out: array<ClipVertex, MAX_POLY>;
+    for (var plane = 0u; plane < 5u; plane++) {
+        var m = 0u;
+        for (var i = 0u; i < n; i++) {
+            let a = (*poly)[i];
+            let b = (*poly)[(i + 1u) % n];
+            let da = plane_distance(plane, a);
+            let db = plane_distance(plane, b);
+            if da >= 0.0 {
+                out[m] = a;
+                m++;
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                // Always interpolate from the inside vertex, so that the edge shared with a
+                // neighbouring triangle is cut at exactly the same point.
+                if da >= 0.0 {
+                    out[m] = a + (b - a) * (da / (da - db));
+                } else {
+                    out[m] = b + (a - b) * (db / (db - da));
+                }
+                m++;
+            }
+        }
+        n = m;
+        if n < 3u {
+            return 0u;
+        }
+        for (var i = 0u; i < n; i++) {
+            (*poly)[i] = out[i];
+        }
+    }
+    return n;
+}
+
+fn snap(v: ClipVertex) -> vec2<i32> {
+    let px = (v.x / v.z * 0.5 + 0.5) * f32(frame.width);
+    let py = (0.5 - v.y / v.z * 0.5) * f32(frame.height);
+    return vec2<i32>(i32(round(px * f32(SUBPIXEL))), i32(round(py * f32(SUBPIXEL))));
+}
+
+// Sign of the doubled signed area of (a, b, c), exactly.
+fn orientation(a: vec2<i32>, b: vec2<i32>, c: vec2<i32>) -> i32 {
+    return wide_sign(wide_sub(wide_mul(b.x - a.x, c.y - a.y), wide_mul(b.y - a.y, c.x - a.x)));
+}
+
+// Sets up sub-triangle `k` of the clipped polygon of triangle t.
+fn setup(t: u32, poly: ptr<function, array<ClipVertex, MAX_POLY>>, k: u32) -> Setup {
+    var s: Setup;
+    s.kind = 0u;
+    let c0 = (*poly)[0];
+    var c1 = (*poly)[k + 1u];
+    var c2 = (*poly)[k + 2u];
+    s.v0 = snap(c0);
+    s.v1 = snap(c1);
+    s.v2 = snap(c2);
+    let o = orientation(s.v0, s.v1, s.v2);
+    if o == 0 {
+        return s;
+    }
+    // Counter-clockwise in NDC (y up) is negative area in pixel space (y down): front facing.
+    let material = tri_materials[t];
+    let double_sided = material < frame.material_count && (materials[material].flags & MATERIAL_DOUBLE_SIDED) != 0u;
+    if o > 0 && !double_sided {
+        return s;
+    }
+    if o < 0 {
+        let tv = s.v1;
+        s.v1 = s.v2;
+        s.v2 = tv;
+        let tc = c1;
+        c1 = c2;
+        c2 = tc;
+    }
+    s.q = vec3<f32>(1.0 / c0.z, 1.0 / c1.z, 1.0 / c2.z);
+    s.r = vec3<f32>(c0.w, c1.w, c2.w) * s.q;
+    let mn = min(min(s.v0, s.v1), s.v2);
+    let mx = max(max(s.v0, s.v1), s.v2);
+    // First and last pixel whose centre (i * 256 + 128) lies in [mn, mx].
+    s.lo = max((mn - vec2<i32>(SUBPIXEL / 2) + vec2<i32>(SUBPIXEL - 1)) >> vec2<u32>(8u), vec2<i32>(0));
+    s.hi = min((mx - vec2<i32>(SUBPIXEL / 2)) >> vec2<u32>(8u), vec2<i32>(i32(frame.width) - 1, i32(frame.height) - 1));
+    if any(s.lo > s.hi) {
+        return s;
+    }
+    let extent = mx - mn;
+    s.kind = select(2u, 1u, extent.x <= SMALL_EXTENT * SUBPIXEL && extent.y <= SMALL_EXTENT * SUBPIXEL);
+    return s;
+}
+
+// Top-left rule for an edge a -> b of a triangle with positive area (pixel space, y down).
+fn top_left(a: vec2<i32>, b: vec2<i32>) -> bool {
+    let d = b - a;
+    return d.y < 0 || (d.y == 0 && d.x > 0);
+}
+
+fn covers(e: i32, top_left_edge: bool) -> bool {
+    return e > 0 || (e == 0 && top_left_edge);
+}
+
+fn layer1_accepts(pixel: vec2<i32>, d: f32) -> bool {
+#if WRITE_L1
+#if REPROJECT
+    let vp = view_position(frame, vec2<f32>(pixel) + 0.5, d);
+    let world = mat_mul(frame.inv_view, vec4<f32>(vp, 1.0));
+    let pc = mat_mul(frame.prev_view_proj, world);
+    if !(pc.w > 0.0) {
+        return false;
+    }
+    let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
+        return false;
+    }
+    let pp = vec2<u32>(prev);
+    let z0 = zref[2u * (pp.y * frame.width + pp.x) + 1u];
+    let prev_d = -mat_mul(frame.prev_view, world).z;
+    return z0 != VIS_EMPTY && prev_d > bitcast<f32>(z0) + frame.dz;
+#else
+    let z0 = zref[2u * (u32(pixel.y) * frame.width + u32(pixel.x)) + 1u];
+    return z0 != VIS_EMPTY && d > bitcast<f32>(z0) + frame.dz;
+#endif
+#else
+    return false;
+#endif
+}
+
+fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
+    if !(d > 0.0 && d <= frame.far) {
+        return;
+    }
+    let p = u32(pixel.y) * frame.width + u32(pixel.x);
+#if COUNT
+    atomicAdd(&counts[p], 1u);
+#endif
+#if WRITE_L0
+    vis0_write(p, d, t);
+#endif
+#if WRITE_L1
+    if layer1_accepts(pixel, d) {
+        vis1_write(p, d, t);
+    }
+#endif
+}
+
+fn depth_at(e: vec3<f32>, s: Setup) -> f32 {
+    return dot(e, s.r) / dot(e, s.q);
+}
+
+fn raster_small_triangle(s: Setup, t: u32) {
+    // Everything relative to the first pixel centre, so it fits in i32.
+    let o = s.lo * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
+    let a = s.v0 - o;
+    let b = s.v1 - o;
+    let c = s.v2 - o;
+    let tl = vec3<bool>(top_left(b, c), top_left(c, a), top_left(a, b));
+    for (var y = s.lo.y; y <= s.hi.y; y++) {
+        for (var x = s.lo.x; x <= s.hi.x; x++) {
+            let p = (vec2<i32>(x, y) - s.lo) * SUBPIXEL;
+            let e0 = (c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x);
+            let e1 = (a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x);
+            let e2 = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+            if covers(e0, tl.x) && covers(e1, tl.y) && covers(e2, tl.z) {
+                fragment(vec2<i32>(x, y), depth_at(vec3<f32>(f32(e0), f32(e1), f32(e2)), s), t);
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
+    let t = gid.x + gid.y * n.x * 64u;
+    if t >= frame.triangle_count {
+        return;
+    }
+    var poly: array<ClipVertex, MAX_POLY>;
+    let count = clip_triangle(t, &poly);
+    for (var k = 0u; k + 2u < count; k++) {
+        let s = setup(t, &poly, k);
+        if s.kind == 1u {
+            raster_small_triangle(s, t);
+        } else if s.kind == 2u {
+            let slot = atomicAdd(&bins[0], 1u);
+            if slot < arrayLength(&large) {
+                large[slot] = (t << 3u) | k;
+            } else {
+                atomicAdd(&bins[1], 1u);
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(1)
+fn bin_args() {
+    let binned = atomicExchange(&bins[0], 0u);
+    let count = min(binned, arrayLength(&large));
+    atomicStore(&bins[2], count);
+    atomicAdd(&bins[3], binned);
+    args[0] = min(count, 65535u);
+    args[1] = (count + 65534u) / 65535u;
+    args[2] = LARGE_SLICES;
+}
+
+var<workgroup> wg_setup: Setup;
+var<workgroup> wg_triangle: u32;
+var<workgroup> wg_valid: u32;
+
+// Exact edge function of a -> b at point p (all in 1/256 pixels).
+fn edge_wide(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> vec2<u32> {
+    return wide_sub(wide_mul(b.x - a.x, p.y - a.y), wide_mul(b.y - a.y, p.x - a.x));
+}
+
+fn covers_wide(e: vec2<u32>, top_left_edge: bool) -> bool {
+    let s = wide_sign(e);
+    return s > 0 || (s == 0 && top_left_edge);
+}
+
+@compute @workgroup_size(16, 16)
+fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    let entry = wid.x + wid.y * 65535u;
+    if lid.x == 0u && lid.y == 0u {
+        wg_valid = 0u;
+        if entry < atomicLoad(&bins[2]) {
+            let packed = large[entry];
+            let t = packed >> 3u;
+            var poly: array<ClipVertex, MAX_POLY>;
+            let count = clip_triangle(t, &poly);
+            let k = packed & 7u;
+            if k + 2u < count {
+                let s = setup(t, &poly, k);
+                wg_setup = s;
+                wg_triangle = t;
+                wg_valid = select(0u, 1u, s.kind == 2u);
+            }
+        }
+    }
+    if workgroupUniformLoad(&wg_valid) == 0u {
+        return;
+    }
+    let s = wg_setup;
+    let t = wg_triangle;
+    let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
+    let tiles = (s.hi - s.lo) / 16 + 1;
+    let tile_count = u32(tiles.x * tiles.y);
+    for (var tile = wid.z; tile < tile_count; tile += LARGE_SLICES) {
+        let pixel = s.lo + vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16 + vec2<i32>(lid.xy);
+        if all(pixel <= s.hi) {
+            let p = pixel * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
+            let e0 = edge_wide(s.v1, s.v2, p);
+            let e1 = edge_wide(s.v2, s.v0, p);
+            let e2 = edge_wide(s.v0, s.v1, p);
+            if covers_wide(e0, tl.x) && covers_wide(e1, tl.y) && covers_wide(e2, tl.z) {
+                let e = vec3<f32>(wide_to_f32(e0), wide_to_f32(e1), wide_to_f32(e2));
+                fragment(pixel, depth_at(e, s), t);
+            }
+        }
+    }
+}

@@ -1,0 +1,34 @@
+// Per-frame constants shared by every kernel. Mirrors `FrameUniform` in src/gpu/frame.rs.
+struct Frame {
+    view: mat4x4<f32>,
+    proj: mat4x4<f32>,
+    inv_view: mat4x4<f32>,
+    prev_view: mat4x4<f32>,
+    prev_view_proj: mat4x4<f32>,
+    width: u32,
+    height: u32,
+    near: f32,
+    far: f32,
+    guard_x: f32,
+    guard_y: f32,
+    dz: f32,
+    ortho: u32,
+    triangle_count: u32,
+    material_count: u32,
+    vertex_count: u32,
+    _pad: u32,
+}
+
+// m * v written out, so every implementation sums in the same order.
+fn mat_mul(m: mat4x4<f32>, v: vec4<f32>) -> vec4<f32> {
+    return ((m[0] * v.x + m[1] * v.y) + m[2] * v.z) + m[3] * v.w;
+}
+
+// View-space position of the surface at view depth `d` seen through pixel coordinate `px`.
+fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
+    let ndc = vec2<f32>(px.x / f32(f.width) * 2.0 - 1.0, 1.0 - px.y / f32(f.height) * 2.0);
+    if f.ortho != 0u {
+        return vec3<f32>((ndc.x - f.proj[3].x) / f.proj[0].x, (ndc.y - f.proj[3].y) / f.proj[1].y, -d);
+    }
+    return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
+}
