@@ -44,6 +44,7 @@ pub struct Renderer {
     history: Option<CameraMatrices>,
     timestamps: Option<Timestamps>,
     passes: Vec<String>,
+    last_frame: Option<FrameUniform>,
 }
 
 impl Renderer {
@@ -151,6 +152,7 @@ impl Renderer {
                 None
             },
             passes: Vec::new(),
+            last_frame: None,
             settings,
         })
     }
@@ -168,6 +170,12 @@ impl Renderer {
     /// Forgets the previous frame (a camera cut): the next frame rasterizes layer 1 exactly.
     pub fn reset_history(&mut self) {
         self.history = None;
+    }
+
+    /// The frame constants of the last [`encode`](Renderer::encode): what the CPU references
+    /// need to reproduce the frame.
+    pub fn frame_uniform(&self) -> Option<&FrameUniform> {
+        self.last_frame.as_ref()
     }
 
     /// The names of the passes the last [`encode`](Renderer::encode) recorded, in order.
@@ -201,6 +209,7 @@ impl Renderer {
             (b.triangle_count, b.material_count, b.vertex_count),
         );
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
+        self.last_frame = Some(uniform);
         let needed = (u64::from(b.triangle_count) * 2 + 1024) * 4;
         if self.large.as_ref().is_none_or(|l| l.size() < needed) {
             let limit = u64::from(device.limits().max_storage_buffer_binding_size) & !3;

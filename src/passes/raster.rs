@@ -154,3 +154,70 @@ impl RasterPass {
         }
     }
 }
+
+/// Runs the `COUNT` variant: how many fragments cover each pixel (every covered pixel centre of
+/// every triangle, no depth test). Watertightness tests read it; it waits for the GPU.
+pub fn coverage_counts(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+    frame: &crate::gpu::FrameUniform,
+) -> crate::Result<Vec<u32>> {
+    use wgpu::util::DeviceExt;
+    let pixels = u64::from(frame.width) * u64::from(frame.height);
+    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("deep-gbuffer.raster.count.frame"),
+        contents: bytemuck::bytes_of(frame),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let bins = gpu::storage_buffer(
+        device,
+        "deep-gbuffer.raster.count.bins",
+        16,
+        wgpu::BufferUsages::empty(),
+    );
+    let args = gpu::storage_buffer(
+        device,
+        "deep-gbuffer.raster.count.args",
+        16,
+        wgpu::BufferUsages::INDIRECT,
+    );
+    let large_bytes = (u64::from(scene.triangle_count()) * 2 + 1024) * 4;
+    let large = gpu::storage_buffer(
+        device,
+        "deep-gbuffer.raster.count.large",
+        large_bytes,
+        wgpu::BufferUsages::empty(),
+    );
+    let counts = gpu::storage_buffer(
+        device,
+        "deep-gbuffer.raster.count.counts",
+        pixels * 4,
+        wgpu::BufferUsages::empty(),
+    );
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("deep-gbuffer.raster.count"),
+    });
+    encoder.clear_buffer(&counts, 0, None);
+    encoder.clear_buffer(&bins, 0, None);
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("deep-gbuffer.raster.count"),
+            timestamp_writes: None,
+        });
+        let targets = RasterTargets {
+            frame: &uniform,
+            bins: &bins,
+            large: &large,
+            args: &args,
+            vis0: None,
+            vis1: None,
+            zref: None,
+            counts: Some(&counts),
+        };
+        RasterPass::new(false).encode(device, &mut pass, scene, RasterMode::Count, &targets);
+    }
+    queue.submit([encoder.finish()]);
+    let bytes = gpu::read_buffer(device, queue, &counts)?;
+    Ok(bytemuck::pod_collect_to_vec::<u8, u32>(&bytes[..(pixels * 4) as usize]))
+}

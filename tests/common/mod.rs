@@ -1,0 +1,78 @@
+//! Shared by the integration tests: one device per test binary, and helpers that render a scene
+//! and return what the CPU references need.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use std::sync::OnceLock;
+
+use deep_gbuffer::gpu::{FrameUniform, Gpu, GpuOptions};
+use deep_gbuffer::{Camera, Renderer, Scene, SceneBuffers, Settings};
+use glam::Vec3;
+
+/// The test device. A machine without an adapter fails the tests: they never skip silently.
+pub fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| match Gpu::new(&GpuOptions::default()) {
+        Ok(gpu) => {
+            eprintln!("test adapter: {}", gpu.describe());
+            gpu
+        }
+        Err(e) => panic!(
+            "{e} (install the software Vulkan driver: apt-get install -y mesa-vulkan-drivers)"
+        ),
+    })
+}
+
+/// One frame's visibility buffers, G-buffer settings and the uniform the GPU used.
+pub struct Rendered {
+    pub vis0: Vec<u64>,
+    pub vis1: Vec<u64>,
+    pub frame: FrameUniform,
+    pub renderer: Renderer,
+    pub buffers: SceneBuffers,
+}
+
+/// Renders `frames` frames of `scene` from `cameras` (one per frame) and returns the last.
+pub fn render_frames(scene: &Scene, cameras: &[Camera], settings: Settings) -> Rendered {
+    let g = gpu();
+    let buffers = SceneBuffers::upload(&g.device, scene).expect("upload");
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).expect("renderer");
+    for camera in cameras {
+        renderer.render(&g.device, &g.queue, &buffers, camera).expect("render");
+    }
+    let vis0 = renderer.read_visibility(&g.device, &g.queue, 0).expect("read vis0");
+    let vis1 = if renderer.settings().layers == 2 {
+        renderer.read_visibility(&g.device, &g.queue, 1).expect("read vis1")
+    } else {
+        Vec::new()
+    };
+    let frame = *renderer.frame_uniform().expect("a frame was encoded");
+    Rendered { vis0, vis1, frame, renderer, buffers }
+}
+
+/// Renders one frame.
+pub fn render(scene: &Scene, camera: &Camera, settings: Settings) -> Rendered {
+    render_frames(scene, std::slice::from_ref(camera), settings)
+}
+
+/// The fixtures folder.
+pub fn fixture(path: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(path)
+}
+
+/// A scene of the given triangles (one material, optionally double-sided).
+pub fn soup(triangles: &[[Vec3; 3]], double_sided: bool) -> Scene {
+    let mut scene = Scene::default();
+    let positions: Vec<Vec3> = triangles.iter().flatten().copied().collect();
+    let indices: Vec<u32> = (0..positions.len() as u32).collect();
+    scene.materials.push(deep_gbuffer::scene::Material { double_sided, ..Default::default() });
+    scene
+        .push_mesh(deep_gbuffer::scene::MeshData {
+            positions: &positions,
+            normals: &[],
+            uvs: &[],
+            indices: &indices,
+            material: 0,
+        })
+        .expect("valid soup");
+    scene
+}
