@@ -17,7 +17,18 @@ use crate::{Error, Result};
 
 /// Loads a `.gltf` or `.glb` file with its buffers and images.
 pub fn load(path: &Path) -> Result<Scene> {
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| match e {
+    precheck(path)?;
+    // The `gltf` crate's validation can panic on some out-of-range indices; that is a malformed
+    // file, not a crash.
+    let imported = std::panic::catch_unwind(|| gltf::import(path)).map_err(|panic| {
+        let message = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        Error::format(path, "glTF", format!("malformed document ({message})"))
+    })?;
+    let (doc, buffers, images) = imported.map_err(|e| match e {
         gltf::Error::Io(io) => Error::io(path, io),
         other => Error::format(path, "glTF", other.to_string()),
     })?;
@@ -253,4 +264,54 @@ pub(crate) fn load_texture_file(path: &Path) -> Result<Texture> {
     let img = image::open(path).map_err(|e| Error::format(path, "image", e.to_string()))?;
     let rgba = img.to_rgba8();
     Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+}
+
+/// Checks the mesh references the `gltf` crate's validation may index without checking
+/// (attribute, index and material ids), so the error names the exact place.
+fn precheck(path: &Path) -> Result<()> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let json_bytes: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        match gltf::Glb::from_slice(&bytes) {
+            Ok(glb) => glb.json.into_owned().into(),
+            Err(e) => return Err(Error::format(path, "GLB header", e.to_string())),
+        }
+    } else {
+        bytes.into()
+    };
+    // Syntax errors are left to the real parser, which names line and column.
+    let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&json_bytes) else { return Ok(()) };
+    let count = |key: &str| doc.get(key).and_then(|v| v.as_array()).map_or(0, Vec::len) as u64;
+    let (accessors, materials) = (count("accessors"), count("materials"));
+    let meshes = doc.get("meshes").and_then(|m| m.as_array()).cloned().unwrap_or_default();
+    for (m, mesh) in meshes.iter().enumerate() {
+        let prims = mesh.get("primitives").and_then(|p| p.as_array()).cloned().unwrap_or_default();
+        for (p, prim) in prims.iter().enumerate() {
+            let at = |what: &str| format!("meshes[{m}].primitives[{p}].{what}");
+            let mut refs: Vec<(String, &serde_json::Value, u64)> = Vec::new();
+            if let Some(attrs) = prim.get("attributes").and_then(|a| a.as_object()) {
+                refs.extend(
+                    attrs.iter().map(|(k, v)| (at(&format!("attributes.{k}")), v, accessors)),
+                );
+            }
+            if let Some(v) = prim.get("indices") {
+                refs.push((at("indices"), v, accessors));
+            }
+            if let Some(v) = prim.get("material") {
+                refs.push((at("material"), v, materials));
+            }
+            for (location, value, len) in refs {
+                match value.as_u64() {
+                    Some(i) if i < len => {}
+                    _ => {
+                        return Err(Error::format(
+                            path,
+                            location,
+                            format!("index {value} out of range (there are {len})"),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }

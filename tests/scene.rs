@@ -1,0 +1,204 @@
+//! Loaders and scene validation: the fixtures load, malformed files give errors that name the
+//! problem and where it is.
+
+mod common;
+
+use common::fixture;
+use deep_gbuffer::scene::LightKind;
+use deep_gbuffer::{Error, Scene};
+use glam::Vec3;
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("deep-gbuffer-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn cornell_fixture_loads_with_its_materials() {
+    let scene = Scene::load(&fixture("cornell/CornellBox-Original.obj")).unwrap();
+    assert_eq!(scene.triangle_count(), 36);
+    assert_eq!(scene.materials.len(), 8);
+    let light = scene.materials.iter().find(|m| m.name == "light").unwrap();
+    assert_eq!(light.emissive, Vec3::new(17.0, 12.0, 4.0));
+    let left = scene.materials.iter().find(|m| m.name == "leftWall").unwrap();
+    assert_eq!(left.base_color.truncate(), Vec3::new(0.63, 0.065, 0.05));
+    scene.validate().unwrap();
+    // The built-in copy is the same geometry, with a camera and a light.
+    let builtin = Scene::from_spec("builtin:cornell").unwrap();
+    assert_eq!(builtin.positions, scene.positions);
+    assert!(builtin.camera.is_some() && !builtin.lights.is_empty());
+}
+
+#[test]
+fn gltf_fixtures_load() {
+    let suzanne = Scene::load(&fixture("suzanne/Suzanne.gltf")).unwrap();
+    assert!(suzanne.triangle_count() > 3000);
+    assert_eq!(
+        suzanne.textures.len(),
+        1,
+        "the base-colour texture (the metal-roughness map is not a base colour)"
+    );
+    assert!(suzanne.uvs.iter().any(|uv| *uv != glam::Vec2::ZERO));
+    suzanne.validate().unwrap();
+    let engine = Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap();
+    assert!(engine.triangle_count() > 50_000, "{}", engine.triangle_count());
+    engine.validate().unwrap();
+}
+
+#[test]
+fn gltf_lights_camera_and_transforms() {
+    let dir = temp_dir("gltf-lights");
+    // One triangle under a translated, scaled node; a spot light and a camera on nodes.
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let bytes: Vec<u8> = positions.iter().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(dir.join("tri.bin"), &bytes).unwrap();
+    let gltf = r#"{
+      "asset": {"version": "2.0"},
+      "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "color": [1, 0.5, 0.25], "intensity": 20, "range": 9, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}, "name": "lamp"}
+      ]}},
+      "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+      "bufferViews": [{"buffer": 0, "byteLength": 36}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+      "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}}],
+      "nodes": [
+        {"mesh": 0, "translation": [10, 0, 0], "scale": [2, 2, 2]},
+        {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 5, 0]},
+        {"camera": 0, "translation": [0, 0, 4]}
+      ],
+      "scenes": [{"nodes": [0, 1, 2]}],
+      "scene": 0
+    }"#;
+    let scene = Scene::load(&write(&dir, "scene.gltf", gltf)).unwrap();
+    assert_eq!(
+        scene.positions,
+        vec![Vec3::new(10.0, 0.0, 0.0), Vec3::new(12.0, 0.0, 0.0), Vec3::new(10.0, 2.0, 0.0)]
+    );
+    assert_eq!(scene.lights.len(), 1);
+    assert_eq!(scene.lights[0].name, "lamp");
+    match scene.lights[0].kind {
+        LightKind::Spot { position, direction, range, inner_cone, outer_cone } => {
+            assert_eq!(position, Vec3::new(0.0, 5.0, 0.0));
+            assert_eq!(direction, Vec3::NEG_Z);
+            assert_eq!((range, inner_cone, outer_cone), (Some(9.0), 0.2, 0.5));
+        }
+        other => panic!("{other:?}"),
+    }
+    let camera = scene.camera.unwrap();
+    assert_eq!(camera.eye, Vec3::new(0.0, 0.0, 4.0));
+    assert!(matches!(camera.projection, deep_gbuffer::Projection::Perspective { far: None, .. }));
+    // No material: the default one is appended.
+    assert_eq!(scene.materials.len(), 1);
+}
+
+#[test]
+fn scenes_without_camera_or_lights_get_defaults() {
+    let mut scene = Scene::load(&fixture("cornell/CornellBox-Original.obj")).unwrap();
+    assert!(scene.camera.is_none() && scene.lights.is_empty());
+    let camera = scene.camera_or_default();
+    let (lo, hi) = scene.bounds().unwrap();
+    // The framing camera looks at the centre from outside the bounds.
+    assert!((camera.target - (lo + hi) * 0.5).length() < 1e-5);
+    assert!(camera.eye.z > hi.z);
+    scene.ensure_lights();
+    assert!(matches!(scene.lights[0].kind, LightKind::Directional { .. }));
+    assert!(scene.ambient.max_element() > 0.0);
+}
+
+fn error_text(result: Result<Scene, Error>) -> String {
+    match result {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn malformed_obj_names_file_and_line() {
+    let dir = temp_dir("obj");
+    let bad_vertex = write(&dir, "v.obj", "v 0 0 0\nv 1 0 0\nv 0 x 0\nf 1 2 3\n");
+    let text = error_text(Scene::load(&bad_vertex));
+    assert!(text.contains("v.obj") && text.contains("line 3"), "{text}");
+
+    let out_of_range = write(&dir, "f.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# comment\nf 1 2 7\n");
+    let text = error_text(Scene::load(&out_of_range));
+    assert!(text.contains("f.obj") && text.contains("line 5"), "{text}");
+
+    let missing_mtl =
+        write(&dir, "m.obj", "mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let text = error_text(Scene::load(&missing_mtl));
+    assert!(text.contains("nowhere.mtl"), "{text}");
+
+    write(&dir, "bad.mtl", "newmtl a\nKd 1 1 1\nKe 1 x 1\n");
+    let bad_mtl =
+        write(&dir, "b.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+    let text = error_text(Scene::load(&bad_mtl));
+    assert!(text.contains("bad.mtl") && text.contains("line 3"), "{text}");
+
+    let text = error_text(Scene::load(&dir.join("absent.obj")));
+    assert!(text.contains("absent.obj"), "{text}");
+}
+
+#[test]
+fn malformed_gltf_names_the_problem() {
+    let dir = temp_dir("gltf");
+    let text = error_text(Scene::load(&write(
+        &dir,
+        "syntax.gltf",
+        "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [ }",
+    )));
+    assert!(text.contains("syntax.gltf") && text.contains("line 2"), "{text}");
+
+    let missing_buffer = r#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "gone.bin", "byteLength": 36}],
+      "bufferViews": [{"buffer": 0, "byteLength": 36}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}"#;
+    let text = error_text(Scene::load(&write(&dir, "nobuf.gltf", missing_buffer)));
+    assert!(text.contains("nobuf.gltf") || text.contains("gone.bin"), "{text}");
+
+    let bad_accessor = r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+      "bufferViews": [{"buffer": 0, "byteLength": 36}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 7}}]}], "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}"#;
+    let text = error_text(Scene::load(&write(&dir, "accessor.gltf", bad_accessor)));
+    assert!(text.contains("accessor.gltf") && text.contains("meshes[0]"), "{text}");
+
+    let text = error_text(Scene::load(&write(&dir, "scene.txt", "hello")));
+    assert!(text.contains("unknown scene format"), "{text}");
+}
+
+#[test]
+fn invalid_scenes_are_refused_with_the_cause() {
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    scene.triangles[5][1] = 10_000;
+    assert!(scene.validate().unwrap_err().to_string().contains("triangle 5 uses vertex 10000"));
+
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    scene.positions[3].y = f32::NAN;
+    assert!(scene.validate().unwrap_err().to_string().contains("position 3 is not finite"));
+
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    scene.triangle_materials[0] = 99;
+    assert!(scene.validate().unwrap_err().to_string().contains("material 99"));
+
+    assert!(Scene::default().validate().unwrap_err().to_string().contains("no triangles"));
+    assert!(matches!(Scene::from_spec("builtin:nope"), Err(Error::UnknownBuiltin(_))));
+}
+
+#[test]
+fn procedural_grid_reaches_millions_of_triangles() {
+    for target in [1_000u32, 100_000, 2_000_000] {
+        let scene = Scene::from_spec(&format!("builtin:grid-{target}")).unwrap();
+        let n = scene.triangle_count() as f64;
+        assert!((n / f64::from(target) - 1.0).abs() < 0.25, "grid-{target} has {n} triangles");
+        scene.validate().unwrap();
+    }
+}
