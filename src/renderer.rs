@@ -99,8 +99,7 @@ impl Renderer {
             });
         }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
-        let binding_limit =
-            u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let binding_limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         let gbuffer_bytes = pixels * gbuffer::bytes_per_pixel(settings.precision);
         if gbuffer_bytes > binding_limit {
             return Err(Error::ExceedsLimit {
@@ -212,7 +211,7 @@ impl Renderer {
         self.last_frame = Some(uniform);
         let needed = (u64::from(b.triangle_count) * 2 + 1024) * 4;
         if self.large.as_ref().is_none_or(|l| l.size() < needed) {
-            let limit = u64::from(device.limits().max_storage_buffer_binding_size) & !3;
+            let limit = device.limits().max_storage_buffer_binding_size & !3;
             self.large = Some(gpu::storage_buffer(
                 device,
                 "deep-gbuffer.raster.large",

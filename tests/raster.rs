@@ -75,7 +75,7 @@ fn dense_gltf_matches_cpu_reference() {
 
 fn random_soup(seed: u64, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut v = |r: &mut rand_chacha::ChaCha8Rng| {
+    let v = |r: &mut rand_chacha::ChaCha8Rng| {
         Vec3::new(
             r.random_range(-extent..extent),
             r.random_range(-extent..extent),

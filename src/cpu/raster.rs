@@ -255,7 +255,7 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
     let vp = view_position(f, [x as f32 + 0.5, y as f32 + 0.5], d);
     let world = mat_mul(&f.inv_view, [vp[0], vp[1], vp[2], 1.0]);
     let pc = mat_mul(&f.prev_view_proj, world);
-    if !(pc[3] > 0.0) {
+    if pc[3].is_nan() || pc[3] <= 0.0 {
         return false;
     }
     let prev = [

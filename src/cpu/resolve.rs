@@ -101,7 +101,7 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
     if n.dot(to_eye) < 0.0 {
         n = (n - to_eye * (n.dot(to_eye) - 1e-3)).normalize();
     }
-    if !(n.dot(n) > 0.5) {
+    if n.dot(n).is_nan() || n.dot(n) <= 0.5 {
         n = geo;
     }
     let mid = scene.triangle_materials[id as usize];

@@ -75,7 +75,6 @@ impl CameraMatrices {
 
 impl FrameUniform {
     /// The uniform for `current` after `previous` (the same camera on a first frame).
-    #[expect(clippy::too_many_arguments, reason = "one plain constructor for a plain struct")]
     pub fn new(
         camera: &Camera,
         current: CameraMatrices,

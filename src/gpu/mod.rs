@@ -116,7 +116,6 @@ pub fn read_buffer(
     queue: &wgpu::Queue,
     buffer: &wgpu::Buffer,
 ) -> Result<Vec<u8>> {
-    let label = format!("{:?}", buffer);
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("deep-gbuffer.readback"),
         size: buffer.size(),
@@ -128,19 +127,20 @@ pub fn read_buffer(
     });
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
     queue.submit([encoder.finish()]);
-    map_read(device, &staging).map_err(|_| Error::Readback(label))
+    map_read(device, &staging)
 }
 
 /// Maps a MAP_READ buffer, waits, and returns its bytes.
-pub fn map_read(device: &wgpu::Device, staging: &wgpu::Buffer) -> std::result::Result<Vec<u8>, ()> {
+pub fn map_read(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
+    let failed = || Error::Readback(format!("{staging:?}"));
     let slice = staging.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
-    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|_| ())?;
-    rx.recv().map_err(|_| ())?.map_err(|_| ())?;
-    let bytes = slice.get_mapped_range().map_err(|_| ())?.to_vec();
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|_| failed())?;
+    rx.recv().map_err(|_| failed())?.map_err(|_| failed())?;
+    let bytes = slice.get_mapped_range().map_err(|_| failed())?.to_vec();
     staging.unmap();
     Ok(bytes)
 }

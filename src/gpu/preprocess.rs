@@ -79,3 +79,59 @@ pub fn declared_defines(source: &str) -> Vec<&str> {
         .map(|rest| rest.split_whitespace().collect())
         .unwrap_or_default()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lookup(name: &str) -> Option<&'static str> {
+        match name {
+            "a.wgsl" => Some("const A = 1;\n#include \"b.wgsl\""),
+            "b.wgsl" => Some("#if X\nconst B = 2;\n#else\nconst B = 3;\n#endif"),
+            _ => None,
+        }
+    }
+
+    fn code(s: &str) -> Vec<&str> {
+        s.lines().map(str::trim).filter(|l| !l.is_empty()).collect()
+    }
+
+    #[test]
+    fn includes_once_and_selects_branches() {
+        let src = "#include \"a.wgsl\"\n#include \"b.wgsl\"\n#if !X\nfn f() {}\n#endif";
+        assert_eq!(
+            code(&preprocess("k", src, &["X"], &lookup).unwrap()),
+            ["const A = 1;", "const B = 2;"]
+        );
+        assert_eq!(
+            code(&preprocess("k", src, &[], &lookup).unwrap()),
+            ["const A = 1;", "const B = 3;", "fn f() {}"]
+        );
+    }
+
+    #[test]
+    fn nested_conditions() {
+        let src = "#if X\n#if Y\nxy\n#else\nx\n#endif\n#endif";
+        assert_eq!(code(&preprocess("k", src, &["X", "Y"], &lookup).unwrap()), ["xy"]);
+        assert_eq!(code(&preprocess("k", src, &["X"], &lookup).unwrap()), ["x"]);
+        assert!(code(&preprocess("k", src, &["Y"], &lookup).unwrap()).is_empty());
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        assert_eq!(preprocess("k", "#endif", &[], &lookup).unwrap_err(), "k:1: #endif without #if");
+        assert!(
+            preprocess("k", "\n#include \"none.wgsl\"", &[], &lookup)
+                .unwrap_err()
+                .starts_with("k:2:")
+        );
+        assert!(preprocess("k", "#if X", &[], &lookup).is_err());
+    }
+
+    #[test]
+    fn keeps_line_numbers() {
+        let out = preprocess("k", "#if X\na\n#endif\nb", &[], &lookup).unwrap();
+        assert_eq!(out.lines().nth(3), Some("b"));
+        assert_eq!(declared_defines("// x\n// defines: A B\n"), ["A", "B"]);
+    }
+}

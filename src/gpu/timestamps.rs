@@ -88,8 +88,7 @@ impl Timestamps {
         if self.names.is_empty() {
             return Ok(Vec::new());
         }
-        let bytes = super::map_read(device, &self.staging)
-            .map_err(|_| crate::Error::Readback("timestamps".into()))?;
+        let bytes = super::map_read(device, &self.staging)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let mut out: Vec<PassTiming> = Vec::new();
         for (i, name) in self.names.iter().enumerate() {

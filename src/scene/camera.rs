@@ -119,10 +119,10 @@ impl Camera {
                 if !(near > 0.0 && near.is_finite()) {
                     return bad("near must be positive and finite");
                 }
-                if let Some(far) = far {
-                    if !(far > near && far.is_finite()) {
-                        return bad("far must be finite and beyond near");
-                    }
+                if let Some(far) = far
+                    && !(far > near && far.is_finite())
+                {
+                    return bad("far must be finite and beyond near");
                 }
             }
             Projection::Orthographic { height, near, far } => {

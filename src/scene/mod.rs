@@ -188,7 +188,7 @@ impl Scene {
         let base = u32::try_from(self.positions.len())
             .map_err(|_| Error::InvalidScene("more than 2^32 vertices".into()))?;
         let n = mesh.positions.len();
-        if mesh.indices.len() % 3 != 0 {
+        if !mesh.indices.len().is_multiple_of(3) {
             return Err(Error::InvalidScene(format!(
                 "index count {} is not a multiple of 3",
                 mesh.indices.len()
@@ -304,14 +304,14 @@ impl Scene {
             )));
         }
         for m in &self.materials {
-            if let Some(t) = m.base_color_texture {
-                if t as usize >= self.textures.len() {
-                    return Err(Error::InvalidScene(format!(
-                        "material `{}` uses texture {t} but there are {} textures",
-                        m.name,
-                        self.textures.len()
-                    )));
-                }
+            if let Some(t) = m.base_color_texture
+                && t as usize >= self.textures.len()
+            {
+                return Err(Error::InvalidScene(format!(
+                    "material `{}` uses texture {t} but there are {} textures",
+                    m.name,
+                    self.textures.len()
+                )));
             }
         }
         for (i, t) in self.textures.iter().enumerate() {

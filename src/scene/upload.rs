@@ -130,8 +130,7 @@ impl SceneBuffers {
             .collect();
         let indices: Vec<u32> = scene.triangles.iter().flatten().copied().collect();
         let check = |what: &str, bytes: usize| -> Result<()> {
-            let limit =
-                u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+            let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
             if bytes as u64 > limit {
                 return Err(Error::ExceedsLimit {
                     what: format!("the scene's {what} buffer"),

@@ -1,0 +1,125 @@
+//! The command line as a user runs it.
+
+use std::process::Command;
+
+fn cli() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_deep-gbuffer"))
+}
+
+fn out_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("deep-gbuffer-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn render_writes_image_layers_and_timings() {
+    let dir = out_dir("render");
+    let status = cli()
+        .args(["render", "builtin:cornell", "--size", "64x48", "--out"])
+        .arg(dir.join("cornell.png"))
+        .arg("--exr")
+        .arg(dir.join("cornell.exr"))
+        .arg("--layers")
+        .arg(dir.join("layers"))
+        .arg("--timings")
+        .arg(dir.join("timings.json"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let png = image::open(dir.join("cornell.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (64, 48));
+    for layer in 0..2 {
+        for what in ["depth", "normal", "basecolor"] {
+            for ext in ["png", "exr"] {
+                let p = dir.join("layers").join(format!("layer{layer}_{what}.{ext}"));
+                assert!(p.metadata().is_ok_and(|m| m.len() > 0), "{}", p.display());
+            }
+        }
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("timings.json")).unwrap()).unwrap();
+    assert_eq!(json["width"], 64);
+    assert_eq!(json["height"], 48);
+    assert!(json["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    let names: Vec<&str> =
+        json["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["raster.clear", "raster.layer0", "raster.layer1", "resolve"]);
+    let total: f64 =
+        json["passes"].as_array().unwrap().iter().map(|p| p["ms"].as_f64().unwrap()).sum();
+    assert!(total > 0.0);
+    assert!((json["total_ms"].as_f64().unwrap() - total).abs() < 1e-9);
+}
+
+#[test]
+fn render_with_camera_and_options() {
+    let dir = out_dir("camera");
+    let out = cli()
+        .args([
+            "render",
+            "builtin:grid-2000",
+            "--size",
+            "40x30",
+            "--camera",
+            "eye=0,4,9,target=0,1,0,fov=50",
+        ])
+        .args([
+            "--layer1",
+            "reproject",
+            "--precision",
+            "packed",
+            "--atomics",
+            "int32",
+            "--dz",
+            "0.1",
+            "--out",
+        ])
+        .arg(dir.join("grid.png"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("grid.png").exists());
+}
+
+/// Every wrong input: exit code 1, one line starting `error:` that names the cause, no panic.
+#[test]
+fn bad_input_gives_one_line_and_a_failure_code() {
+    let dir = out_dir("bad");
+    let bad_obj = dir.join("bad.obj");
+    std::fs::write(&bad_obj, "v 0 0 0\nv 1 0\nf 1 2 3\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["render".into(), "missing.gltf".into()], "missing.gltf"),
+        (vec!["render".into(), bad_obj.display().to_string()], "line 2"),
+        (vec!["render".into(), "builtin:nothing".into()], "unknown built-in scene"),
+        (vec!["render".into(), "--size".into(), "0x10".into()], "size"),
+        (vec!["render".into(), "--camera".into(), "eye=1,2".into()], "camera"),
+        (vec!["render".into(), "--camera".into(), "eye=0,1,0,target=0,1,0".into()], "coincide"),
+        (vec!["render".into(), "--dz=-1".into()], "dz"),
+        (vec!["render".into(), "--size".into(), "20000x10".into()], "size"),
+    ];
+    for (args, needle) in cases {
+        let out = cli().args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let ours: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("error: ") && !l.contains("XDG_RUNTIME_DIR"))
+            .collect();
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(ours.len(), 1, "{args:?}: {stderr}");
+        assert!(ours[0].contains(needle), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn info_names_adapter_and_raster_path() {
+    let out = cli().arg("info").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("adapter:")
+            && text.contains("raster:")
+            && text.contains("SHADER_INT64_ATOMIC_MIN_MAX"),
+        "{text}"
+    );
+}
