@@ -5,7 +5,7 @@ use crate::gbuffer::{self, GBufferLayer};
 use crate::gpu::frame::CameraMatrices;
 use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
 use crate::passes::fill::FillPass;
-use crate::passes::raster::{RasterMode, RasterPass, RasterTargets};
+use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
 use crate::passes::resolve::ResolvePass;
 use crate::scene::Camera;
 use crate::settings::{AtomicPath, Layer1Variant, Settings};
@@ -130,13 +130,13 @@ impl Renderer {
             bins: gpu::storage_buffer(
                 device,
                 "deep-gbuffer.raster.bins",
-                16,
+                raster::BINS_BYTES,
                 wgpu::BufferUsages::empty(),
             ),
             args: gpu::storage_buffer(
                 device,
                 "deep-gbuffer.raster.args",
-                16,
+                raster::ARGS_BYTES,
                 wgpu::BufferUsages::INDIRECT,
             ),
             large: None,
@@ -177,6 +177,12 @@ impl Renderer {
         self.last_frame.as_ref()
     }
 
+    /// The uniform buffer holding the last frame's [`FrameUniform`] (camera and image size),
+    /// for passes of the caller's that follow this stage.
+    pub fn frame_buffer(&self) -> &wgpu::Buffer {
+        &self.frame
+    }
+
     /// The names of the passes the last [`encode`](Renderer::encode) recorded, in order.
     pub fn passes(&self) -> &[String] {
         &self.passes
@@ -209,15 +215,12 @@ impl Renderer {
         );
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
         self.last_frame = Some(uniform);
-        let needed = (u64::from(b.triangle_count) * 2 + 1024) * 4;
+        let needed =
+            raster::bin_bytes(b.triangle_count, device.limits().max_storage_buffer_binding_size);
         if self.large.as_ref().is_none_or(|l| l.size() < needed) {
-            let limit = device.limits().max_storage_buffer_binding_size & !3;
-            self.large = Some(gpu::storage_buffer(
-                device,
-                "deep-gbuffer.raster.large",
-                needed.min(limit),
-                wgpu::BufferUsages::empty(),
-            ));
+            let usage = wgpu::BufferUsages::empty();
+            self.large =
+                Some(gpu::storage_buffer(device, "deep-gbuffer.raster.large", needed, usage));
         }
         encoder.clear_buffer(&self.bins, 0, None);
 
@@ -373,7 +376,7 @@ impl Renderer {
     /// Reads the raster counters of the last frame (waits for the GPU).
     pub fn diagnostics(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Diagnostics> {
         let bytes = gpu::read_buffer(device, queue, &self.bins)?;
-        let w: &[u32] = bytemuck::cast_slice(&bytes[..16]);
+        let w: &[u32] = bytemuck::cast_slice(&bytes[..raster::BINS_BYTES as usize]);
         Ok(Diagnostics { large_triangles: w[3], dropped_triangles: w[1] })
     }
 }

@@ -4,10 +4,13 @@
 // raster_small: one thread per input triangle: transform, clip against the near plane and the
 //   guard band (in homogeneous space), snap to 1/256-pixel fixed point, cull back faces, then
 //   rasterize triangles whose extent is at most SMALL_EXTENT pixels right here, and append the
-//   others to the large-triangle bin.
-// bin_args: turns the bin's count into indirect dispatch arguments.
-// raster_large: one 16x16 workgroup per (large triangle, slice): the slices walk the triangle's
-//   16x16 tiles, one pixel per thread, so a screen-filling triangle costs about its pixels.
+//   others to one of two bins by the number of 16x16 tiles their bounds cover: up to
+//   MEDIUM_TILES tiles (bin 0), more (bin 1).
+// bin_args: turns the bins' counts into indirect dispatch arguments.
+// raster_large: one 16x16 workgroup per (binned triangle, slice), one pixel per thread. Bin 0
+//   has one slice per triangle, walking its few tiles; bin 1 has LARGE_SLICES slices that
+//   share the tiles, so a screen-filling triangle costs about its pixels and no workgroup is
+//   launched for a slice without a tile.
 //
 // Coverage is exact: pixel centres are tested with integer edge functions (exact 64-bit for
 // large triangles) and the top-left rule, so adjacent triangles neither crack nor overlap.
@@ -26,6 +29,7 @@
 
 const SUBPIXEL: i32 = 256;
 const SMALL_EXTENT: i32 = 16;
+const MEDIUM_TILES: u32 = 4u;
 const LARGE_SLICES: u32 = 32u;
 const MAX_POLY: u32 = 9u;
 
@@ -34,10 +38,13 @@ const MAX_POLY: u32 = 9u;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 @group(0) @binding(3) var<storage, read> tri_materials: array<u32>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
-// [0]: large triangles binned since the last bin_args, [1]: large triangles dropped for lack of
-// room, [2]: entries for the current raster_large dispatch, [3]: large triangles this frame
+// Bin b (0 or 1) keeps at [4b] the triangles binned since the last bin_args and at [4b + 2] the
+// entries of the current raster_large dispatch; [1]: triangles dropped for lack of room,
+// [3]: binned triangles this frame.
 @group(0) @binding(5) var<storage, read_write> bins: array<atomic<u32>>;
-@group(0) @binding(6) var<storage, read_write> large: array<u32>;
+// Bin b holds its entries at [b * capacity, (b + 1) * capacity), capacity = length / 2. An entry
+// is (triangle << 3 | clipped sub-triangle, tile count).
+@group(0) @binding(6) var<storage, read_write> large: array<vec2<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 #if WRITE_L0
 @group(0) @binding(8) var<storage, read_write> vis0: array<VisWord>;
@@ -287,9 +294,13 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if s.kind == 1u {
             raster_small_triangle(s, t);
         } else if s.kind == 2u {
-            let slot = atomicAdd(&bins[0], 1u);
-            if slot < arrayLength(&large) {
-                large[slot] = (t << 3u) | k;
+            let tiles = (s.hi - s.lo) / 16 + 1;
+            let tile_count = u32(tiles.x * tiles.y);
+            let bin = select(0u, 1u, tile_count > MEDIUM_TILES);
+            let capacity = arrayLength(&large) / 2u;
+            let slot = atomicAdd(&bins[4u * bin], 1u);
+            if slot < capacity {
+                large[bin * capacity + slot] = vec2<u32>((t << 3u) | k, tile_count);
             } else {
                 atomicAdd(&bins[1], 1u);
             }
@@ -299,13 +310,15 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 
 @compute @workgroup_size(1)
 fn bin_args() {
-    let binned = atomicExchange(&bins[0], 0u);
-    let count = min(binned, arrayLength(&large));
-    atomicStore(&bins[2], count);
-    atomicAdd(&bins[3], binned);
-    args[0] = min(count, 65535u);
-    args[1] = (count + 65534u) / 65535u;
-    args[2] = LARGE_SLICES;
+    for (var bin = 0u; bin < 2u; bin++) {
+        let binned = atomicExchange(&bins[4u * bin], 0u);
+        let count = min(binned, arrayLength(&large) / 2u);
+        atomicStore(&bins[4u * bin + 2u], count);
+        atomicAdd(&bins[3], binned);
+        args[4u * bin] = min(count, 65535u);
+        args[4u * bin + 1u] = (count + 65534u) / 65535u;
+        args[4u * bin + 2u] = select(1u, LARGE_SLICES, bin == 1u);
+    }
 }
 
 var<workgroup> wg_setup: Setup;
@@ -322,13 +335,21 @@ fn covers_wide(e: vec2<u32>, top_left_edge: bool) -> bool {
     return s > 0 || (s == 0 && top_left_edge);
 }
 
+// Which bin a raster_large dispatch reads: 0 or 1.
+override BIN: u32 = 0u;
+
 @compute @workgroup_size(16, 16)
 fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let entry = wid.x + wid.y * 65535u;
     if lid.x == 0u && lid.y == 0u {
         wg_valid = 0u;
-        if entry < atomicLoad(&bins[2]) {
-            let packed = large[entry];
+        var e = vec2<u32>(0u);
+        if entry < atomicLoad(&bins[4u * BIN + 2u]) {
+            e = large[BIN * (arrayLength(&large) / 2u) + entry];
+        }
+        // Slices beyond the triangle's tile count have nothing to do: skip the set-up.
+        if wid.z < e.y {
+            let packed = e.x;
             let t = packed >> 3u;
             var poly: array<ClipVertex, MAX_POLY>;
             let count = clip_triangle(t, &poly);
@@ -349,7 +370,8 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
     let tiles = (s.hi - s.lo) / 16 + 1;
     let tile_count = u32(tiles.x * tiles.y);
-    for (var tile = wid.z; tile < tile_count; tile += LARGE_SLICES) {
+    let slices = select(1u, LARGE_SLICES, BIN == 1u);
+    for (var tile = wid.z; tile < tile_count; tile += slices) {
         let pixel = s.lo + vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16 + vec2<i32>(lid.xy);
         if all(pixel <= s.hi) {
             let p = pixel * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);

@@ -37,6 +37,17 @@ pub fn compute_pipeline(
     entry: &str,
     defines: &[&str],
 ) -> wgpu::ComputePipeline {
+    compute_pipeline_with(device, kernel, entry, defines, &[])
+}
+
+/// [`compute_pipeline`] with values for the shader's `override` constants.
+pub fn compute_pipeline_with(
+    device: &wgpu::Device,
+    kernel: &str,
+    entry: &str,
+    defines: &[&str],
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
     let label = format!("deep-gbuffer.{kernel}");
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(&label),
@@ -47,7 +58,7 @@ pub fn compute_pipeline(
         layout: None,
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
         cache: None,
     })
 }

@@ -1,7 +1,7 @@
 //! A small WGSL preprocessor, shared by `build.rs` (validation) and the runtime (shader
 //! creation): `#include "path"` (relative to `wgsl/`, each file once), and `#if NAME`,
-//! `#if !NAME`, `#else`, `#endif` on defined names. Lines it consumes become empty lines, so the
-//! top-level kernel keeps its line numbers in error messages.
+//! `#if !NAME`, `#else`, `#endif` on defined names. Directive lines and inactive lines become empty
+//! lines, so line numbers hold up to the first `#include`.
 
 /// Expands `source` (the file `name`) with `defines`; `lookup` finds an included file's text.
 pub fn preprocess<'a>(

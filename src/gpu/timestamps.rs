@@ -58,14 +58,29 @@ impl Timestamps {
         self.names.clear();
     }
 
-    /// Timestamp writes for a pass named `name` (`None` once the set is full).
-    pub fn pass(&mut self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+    fn slot(&mut self, name: &str) -> Option<u32> {
         let i = self.names.len() as u32;
         if i >= self.capacity {
             return None;
         }
         self.names.push(name.to_string());
+        Some(i)
+    }
+
+    /// Timestamp writes for a compute pass named `name` (`None` once the set is full).
+    pub fn pass(&mut self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let i = self.slot(name)?;
         Some(wgpu::ComputePassTimestampWrites {
+            query_set: &self.query_set,
+            beginning_of_pass_write_index: Some(2 * i),
+            end_of_pass_write_index: Some(2 * i + 1),
+        })
+    }
+
+    /// Timestamp writes for a render pass named `name` (`None` once the set is full).
+    pub fn render_pass(&mut self, name: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        let i = self.slot(name)?;
+        Some(wgpu::RenderPassTimestampWrites {
             query_set: &self.query_set,
             beginning_of_pass_write_index: Some(2 * i),
             end_of_pass_write_index: Some(2 * i + 1),

@@ -30,18 +30,30 @@ pub enum RasterMode {
 struct Pipelines {
     small: wgpu::ComputePipeline,
     args: wgpu::ComputePipeline,
-    large: wgpu::ComputePipeline,
+    /// One per bin (the `BIN` override): few tiles, many tiles.
+    large: [wgpu::ComputePipeline; 2],
+}
+
+/// Bytes of the bin counters (8 u32, see `bins` in `wgsl/raster.wgsl`).
+pub const BINS_BYTES: u64 = 32;
+/// Bytes of the indirect arguments (two dispatches of 4 u32).
+pub const ARGS_BYTES: u64 = 32;
+
+/// Bytes of the bin entries for `triangles` triangles: two bins, each with room for two
+/// clipped sub-triangles per triangle plus slack, 8 bytes an entry, within `limit`.
+pub fn bin_bytes(triangles: u32, limit: u64) -> u64 {
+    ((u64::from(triangles) * 2 + 1024) * 2 * 8).min(limit & !15)
 }
 
 /// The buffers one raster step reads and writes.
 pub struct RasterTargets<'a> {
     /// The frame uniform.
     pub frame: &'a wgpu::Buffer,
-    /// Bin counters (16 bytes).
+    /// Bin counters ([`BINS_BYTES`]).
     pub bins: &'a wgpu::Buffer,
-    /// The large-triangle bin.
+    /// The bins' entries ([`bin_bytes`]).
     pub large: &'a wgpu::Buffer,
-    /// Indirect arguments for `raster_large` (16 bytes, INDIRECT usage).
+    /// Indirect arguments for `raster_large` ([`ARGS_BYTES`], INDIRECT usage).
     pub args: &'a wgpu::Buffer,
     /// Layer 0 visibility buffer (Layer0, Both).
     pub vis0: Option<&'a wgpu::Buffer>,
@@ -93,7 +105,15 @@ impl RasterPass {
             Pipelines {
                 small: gpu::compute_pipeline(device, "raster", "raster_small", &defines),
                 args: gpu::compute_pipeline(device, "raster", "bin_args", &defines),
-                large: gpu::compute_pipeline(device, "raster", "raster_large", &defines),
+                large: [0.0, 1.0].map(|bin| {
+                    gpu::compute_pipeline_with(
+                        device,
+                        "raster",
+                        "raster_large",
+                        &defines,
+                        &[("BIN", bin)],
+                    )
+                }),
             }
         })
     }
@@ -134,7 +154,10 @@ impl RasterPass {
                 }
             }
             let small = gpu::bind_group(device, "deep-gbuffer.raster.small", &p.small, &entries);
-            let large = gpu::bind_group(device, "deep-gbuffer.raster.large", &p.large, &entries);
+            let large = p
+                .large
+                .each_ref()
+                .map(|l| gpu::bind_group(device, "deep-gbuffer.raster.large", l, &entries));
             let args = gpu::bind_group(
                 device,
                 "deep-gbuffer.raster.args",
@@ -148,9 +171,11 @@ impl RasterPass {
             pass.set_pipeline(&p.args);
             pass.set_bind_group(0, &args, &[]);
             pass.dispatch_workgroups(1, 1, 1);
-            pass.set_pipeline(&p.large);
-            pass.set_bind_group(0, &large, &[]);
-            pass.dispatch_workgroups_indirect(t.args, 0);
+            for bin in 0..2 {
+                pass.set_pipeline(&p.large[bin]);
+                pass.set_bind_group(0, &large[bin], &[]);
+                pass.dispatch_workgroups_indirect(t.args, bin as u64 * 16);
+            }
         }
     }
 }
@@ -173,16 +198,17 @@ pub fn coverage_counts(
     let bins = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.bins",
-        16,
+        BINS_BYTES,
         wgpu::BufferUsages::empty(),
     );
     let args = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.args",
-        16,
+        ARGS_BYTES,
         wgpu::BufferUsages::INDIRECT,
     );
-    let large_bytes = (u64::from(scene.triangle_count()) * 2 + 1024) * 4;
+    let large_bytes =
+        bin_bytes(scene.triangle_count(), device.limits().max_storage_buffer_binding_size);
     let large = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.large",
