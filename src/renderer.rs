@@ -73,6 +73,10 @@ impl Renderer {
 
     /// Creates the renderer's pipelines and targets on `device`.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Renderer> {
+        gpu::scoped(device, "deep-gbuffer.renderer", || Self::create(device, queue, settings))
+    }
+
+    fn create(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Renderer> {
         settings.validate()?;
         let features = device.features();
         let int64 = match settings.atomics {
@@ -319,12 +323,13 @@ impl Renderer {
         scene: &SceneBuffers,
         camera: &Camera,
     ) -> Result<()> {
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("deep-gbuffer.frame"),
-        });
-        self.encode(device, queue, &mut encoder, scene, camera)?;
-        queue.submit([encoder.finish()]);
-        Ok(())
+        gpu::scoped(device, "deep-gbuffer.frame", || {
+            let label = Some("deep-gbuffer.frame");
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+            self.encode(device, queue, &mut encoder, scene, camera)?;
+            queue.submit([encoder.finish()]);
+            Ok(())
+        })
     }
 
     /// Per-pass GPU times of the last submitted frame (empty without `TIMESTAMP_QUERY`).

@@ -414,3 +414,36 @@ fn equal_depth_ties_go_to_the_smaller_id_every_run() {
         assert_eq!(again.vis1, first.vis1);
     }
 }
+
+#[test]
+fn sizes_beyond_the_device_are_refused_with_the_limit() {
+    let g = gpu();
+    let limit = g.device.limits().max_storage_buffer_binding_size;
+    // A square whose full-precision layer (64 bytes a pixel) just exceeds the binding limit.
+    let side = ((limit / 64) as f64).sqrt() as u32 + 2;
+    if side <= deep_gbuffer::gpu::frame::MAX_IMAGE_SIDE {
+        match deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(side, side)) {
+            Err(deep_gbuffer::Error::ExceedsLimit { needed, limit: l, .. }) => assert!(needed > l),
+            Err(e) => panic!("unexpected error {e}"),
+            Ok(_) => panic!("a {side}x{side} G-buffer exceeds {limit} bytes"),
+        }
+    }
+    assert!(matches!(
+        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(0, 10)),
+        Err(deep_gbuffer::Error::InvalidSetting { name: "size", .. })
+    ));
+}
+
+#[test]
+fn imported_buffers_are_checked_against_their_counts() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let uploaded = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let mut b = uploaded.buffers().clone();
+    SceneBuffers::import(b.clone()).expect("the uploaded buffers import as they are");
+    b.triangle_count += 1;
+    let e = SceneBuffers::import(b.clone()).unwrap_err().to_string();
+    assert!(e.contains("indices") && e.contains("bytes"), "{e}");
+    b.triangle_count = 0;
+    assert!(SceneBuffers::import(b).is_err());
+}

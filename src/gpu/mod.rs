@@ -84,6 +84,20 @@ pub fn bind_group(
     })
 }
 
+/// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes
+/// [`Error::Gpu`] naming `label` instead of reaching the device's uncaptured-error handler.
+pub fn scoped<T>(device: &wgpu::Device, label: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let value = f();
+    let errors = [pollster::block_on(memory.pop()), pollster::block_on(validation.pop())];
+    let value = value?;
+    match errors.into_iter().flatten().next() {
+        Some(e) => Err(Error::Gpu { label: label.to_string(), message: e.to_string().lines().collect::<Vec<_>>().join(" ") }),
+        None => Ok(value),
+    }
+}
+
 /// Workgroup counts for `groups` one-dimensional workgroups, folded into y past the 65535 limit.
 pub fn dispatch_size(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, 65535);

@@ -91,6 +91,10 @@ pub const MAX_TRIANGLES: u32 = 1 << 29;
 impl SceneBuffers {
     /// Validates `scene` and uploads it.
     pub fn upload(device: &wgpu::Device, scene: &Scene) -> Result<SceneBuffers> {
+        crate::gpu::scoped(device, "deep-gbuffer.scene", || Self::create(device, scene))
+    }
+
+    fn create(device: &wgpu::Device, scene: &Scene) -> Result<SceneBuffers> {
         scene.validate()?;
         let limits = device.limits();
         let mut texels: Vec<u32> = Vec::new();
