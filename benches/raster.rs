@@ -1,1 +1,146 @@
-fn main() {}
+//! Raster and resolve timed with GPU timestamp queries (criterion `iter_custom`: the reported
+//! time is GPU time of the named pass, not wall clock), with the hardware-raster baseline drawing
+//! the same triangles on the same device in the same run.
+//!
+//! `DEEP_GBUFFER_BENCH_SIZES` (default `256x256,1920x1080`) and `DEEP_GBUFFER_BENCH_SCENES`
+//! (default `cornell,engine`) narrow the run. A summary table (mean ms per pass, and the
+//! compute/hardware ratio) is printed at the end and written to `target/raster-bench.md`.
+
+use std::sync::Mutex;
+use std::time::Duration;
+
+use criterion::Criterion;
+use deep_gbuffer::gpu::{Gpu, GpuOptions, Timestamps};
+use deep_gbuffer::passes::baseline::BaselinePass;
+use deep_gbuffer::{Camera, Layer1Variant, Precision, Renderer, Scene, SceneBuffers, Settings};
+
+static SUMMARY: Mutex<Vec<(String, String, f64)>> = Mutex::new(Vec::new());
+
+fn load(name: &str) -> Scene {
+    match name {
+        "engine" => Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/engine/2CylinderEngine.gltf")),
+        other => Scene::from_spec(&format!("builtin:{other}")),
+    }
+    .unwrap_or_else(|e| panic!("scene {name}: {e}"))
+}
+
+/// Mean GPU milliseconds of `pass` over `iters` frames of `renderer`.
+fn frames(gpu: &Gpu, renderer: &mut Renderer, scene: &SceneBuffers, camera: &Camera, pass: &str, iters: u64) -> f64 {
+    let mut total = 0.0;
+    for _ in 0..iters {
+        renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
+        let timings = renderer.timings(&gpu.device).unwrap();
+        total += timings.iter().find(|t| t.name == pass).unwrap_or_else(|| panic!("no pass {pass}: {timings:?}")).ms;
+    }
+    total
+}
+
+fn record(group: &str, name: &str, ms: f64) {
+    SUMMARY.lock().unwrap().push((group.to_string(), name.to_string(), ms));
+}
+
+fn bench_scene(c: &mut Criterion, gpu: &Gpu, scene_name: &str, (w, h): (u32, u32)) {
+    let scene = load(scene_name);
+    let camera = scene.camera_or_default();
+    let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
+    let group_name = format!("{scene_name} ({} triangles) {w}x{h}", scene.triangle_count());
+    let mut group = c.benchmark_group(format!("raster/{scene_name}/{w}x{h}"));
+    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+
+    let variants: [(&str, Layer1Variant, Precision, &str); 7] = [
+        ("raster.layer0", Layer1Variant::TwoPass, Precision::Full, "raster.layer0"),
+        ("raster.layer1 two-pass", Layer1Variant::TwoPass, Precision::Full, "raster.layer1"),
+        ("raster.layers previous", Layer1Variant::Previous, Precision::Full, "raster.layers"),
+        ("raster.layers reproject", Layer1Variant::Reproject, Precision::Full, "raster.layers"),
+        ("resolve full", Layer1Variant::TwoPass, Precision::Full, "resolve"),
+        ("resolve packed", Layer1Variant::TwoPass, Precision::Packed, "resolve"),
+        ("raster.clear", Layer1Variant::TwoPass, Precision::Full, "raster.clear"),
+    ];
+    for (name, layer1, precision, pass) in variants {
+        let settings = Settings { layer1, precision, ..Settings::with_size(w, h) };
+        let mut renderer = match Renderer::new(&gpu.device, &gpu.queue, settings) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("skipping {name} at {w}x{h}: {e}");
+                continue;
+            }
+        };
+        // The first frame of a one-pass variant is two-pass; later frames have history.
+        renderer.render(&gpu.device, &gpu.queue, &buffers, &camera).unwrap();
+        let mut sum = 0.0;
+        let mut count = 0u64;
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                let ms = frames(gpu, &mut renderer, &buffers, &camera, pass, iters);
+                sum += ms;
+                count += iters;
+                Duration::from_secs_f64(ms / 1e3)
+            })
+        });
+        record(&group_name, name, sum / count.max(1) as f64);
+    }
+
+    // The same triangles through the hardware rasterizer, on the same device.
+    let mut renderer = Renderer::new(&gpu.device, &gpu.queue, Settings::with_size(w, h)).unwrap();
+    renderer.render(&gpu.device, &gpu.queue, &buffers, &camera).unwrap();
+    let all_double_sided = scene.materials.iter().all(|m| m.double_sided);
+    let baseline = BaselinePass::new(&gpu.device, w, h, !all_double_sided);
+    let mut timestamps = Timestamps::new(&gpu.device, &gpu.queue, 1).expect("timestamp queries");
+    let (mut sum, mut count) = (0.0, 0u64);
+    group.bench_function("hardware.layer0", |b| {
+        b.iter_custom(|iters| {
+            let mut ms = 0.0;
+            for _ in 0..iters {
+                timestamps.reset();
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                baseline.encode(&gpu.device, &mut encoder, &buffers, renderer.frame_buffer(), timestamps.render_pass("hardware.layer0"));
+                timestamps.resolve(&mut encoder);
+                gpu.queue.submit([encoder.finish()]);
+                ms += timestamps.read(&gpu.device).unwrap()[0].ms;
+            }
+            sum += ms;
+            count += iters;
+            Duration::from_secs_f64(ms / 1e3)
+        })
+    });
+    record(&group_name, "hardware.layer0", sum / count.max(1) as f64);
+    group.finish();
+}
+
+fn main() {
+    let gpu = Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
+    let sizes: Vec<(u32, u32)> = std::env::var("DEEP_GBUFFER_BENCH_SIZES")
+        .unwrap_or_else(|_| "256x256,1920x1080".into())
+        .split(',')
+        .map(|s| {
+            let (w, h) = s.split_once('x').expect("WxH");
+            (w.parse().unwrap(), h.parse().unwrap())
+        })
+        .collect();
+    let scenes = std::env::var("DEEP_GBUFFER_BENCH_SCENES").unwrap_or_else(|_| "cornell,engine".into());
+    let mut c = Criterion::default().configure_from_args();
+    for scene in scenes.split(',') {
+        for &size in &sizes {
+            bench_scene(&mut c, &gpu, scene, size);
+        }
+    }
+    c.final_summary();
+
+    let mut table = format!("Device: {}\n\n| scene | pass | GPU ms |\n|---|---|---:|\n", gpu.describe());
+    let summary = SUMMARY.lock().unwrap();
+    for (group, name, ms) in summary.iter() {
+        table += &format!("| {group} | {name} | {ms:.3} |\n");
+    }
+    table += "\n| scene | compute layer 0 / hardware layer 0 | layer 1 (two-pass) / layer 0 |\n|---|---:|---:|\n";
+    let find = |g: &str, n: &str| summary.iter().find(|(gg, nn, _)| gg == g && nn == n).map(|x| x.2);
+    let mut groups: Vec<&String> = summary.iter().map(|(g, _, _)| g).collect();
+    groups.dedup();
+    for g in groups {
+        if let (Some(l0), Some(hw), Some(l1)) = (find(g, "raster.layer0"), find(g, "hardware.layer0"), find(g, "raster.layer1 two-pass")) {
+            table += &format!("| {g} | {:.1} | {:.2} |\n", l0 / hw, l1 / l0);
+        }
+    }
+    println!("\n{table}");
+    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/raster-bench.md");
+    let _ = std::fs::write(out, table);
+}

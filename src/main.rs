@@ -157,6 +157,8 @@ struct TimingsFile<'a> {
     height: u32,
     raster_path: &'a str,
     triangles: u32,
+    /// Clipped triangles too large for one thread, rasterized by tiles.
+    binned_triangles: u32,
     passes: Vec<deep_gbuffer::gpu::PassTiming>,
     total_ms: f64,
 }
@@ -218,6 +220,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             height: h,
             raster_path: renderer.raster_path(),
             triangles: buffers.triangle_count(),
+            binned_triangles: diagnostics.large_triangles,
             total_ms: passes.iter().map(|p| p.ms).sum(),
             passes,
         };
