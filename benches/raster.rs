@@ -15,27 +15,84 @@ use deep_gbuffer::passes::baseline::BaselinePass;
 use deep_gbuffer::{Camera, Layer1Variant, Precision, Renderer, Scene, SceneBuffers, Settings};
 
 static SUMMARY: Mutex<Vec<(String, String, f64)>> = Mutex::new(Vec::new());
+static PACKED_ERRORS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+/// The error of the packed G-buffer against the full one, over the surface pixels of both layers:
+/// normal angle (max and mean, radians), base colour (max absolute), emission (max relative).
+fn packed_error(gpu: &Gpu, buffers: &SceneBuffers, camera: &Camera, w: u32, h: u32) -> String {
+    let layers = |precision| {
+        let mut r = Renderer::new(
+            &gpu.device,
+            &gpu.queue,
+            Settings { precision, timings: false, ..Settings::with_size(w, h) },
+        )
+        .unwrap();
+        r.render(&gpu.device, &gpu.queue, buffers, camera).unwrap();
+        [0, 1].map(|l| r.read_gbuffer(&gpu.device, &gpu.queue, l).unwrap())
+    };
+    let (full, packed) = (layers(Precision::Full), layers(Precision::Packed));
+    let (mut max_angle, mut sum_angle, mut max_color, mut max_emission, mut n) =
+        (0.0f32, 0.0f64, 0.0f32, 0.0f32, 0u64);
+    for (f, p) in full.iter().zip(&packed) {
+        for (a, b) in f.samples.iter().zip(&p.samples).filter(|(a, _)| a.depth > 0.0) {
+            let angle = a.normal.dot(b.normal).clamp(-1.0, 1.0).acos();
+            max_angle = max_angle.max(angle);
+            sum_angle += f64::from(angle);
+            max_color = max_color.max((a.base_color - b.base_color).abs().max_element());
+            let e = a.emissive.max_element();
+            if e > 0.0 {
+                max_emission = max_emission.max((a.emissive - b.emissive).abs().max_element() / e);
+            }
+            n += 1;
+        }
+    }
+    format!(
+        "{:.2e} | {:.2e} | {:.2e} | {:.2e}",
+        max_angle,
+        sum_angle / n.max(1) as f64,
+        max_color,
+        max_emission
+    )
+}
 
 fn load(name: &str) -> Scene {
     match name {
-        "engine" => Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/engine/2CylinderEngine.gltf")),
+        "engine" => Scene::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("fixtures/engine/2CylinderEngine.gltf"),
+        ),
         other => Scene::from_spec(&format!("builtin:{other}")),
     }
     .unwrap_or_else(|e| panic!("scene {name}: {e}"))
 }
 
 /// Mean GPU milliseconds of `pass` over `iters` frames of `renderer`.
-fn frames(gpu: &Gpu, renderer: &mut Renderer, scene: &SceneBuffers, camera: &Camera, pass: &str, iters: u64) -> f64 {
+fn frames(
+    gpu: &Gpu,
+    renderer: &mut Renderer,
+    scene: &SceneBuffers,
+    camera: &Camera,
+    pass: &str,
+    iters: u64,
+) -> f64 {
     let mut total = 0.0;
     for _ in 0..iters {
         renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
         let timings = renderer.timings(&gpu.device).unwrap();
-        total += timings.iter().find(|t| t.name == pass).unwrap_or_else(|| panic!("no pass {pass}: {timings:?}")).ms;
+        total += timings
+            .iter()
+            .find(|t| t.name == pass)
+            .unwrap_or_else(|| panic!("no pass {pass}: {timings:?}"))
+            .ms;
     }
     total
 }
 
-fn record(group: &str, name: &str, ms: f64) {
+fn record(group: &str, name: &str, sum: f64, count: u64) {
+    if count == 0 {
+        return; // filtered out on the command line
+    }
+    let ms = sum / count as f64;
     SUMMARY.lock().unwrap().push((group.to_string(), name.to_string(), ms));
 }
 
@@ -44,8 +101,15 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, scene_name: &str, (w, h): (u32, u32
     let camera = scene.camera_or_default();
     let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
     let group_name = format!("{scene_name} ({} triangles) {w}x{h}", scene.triangle_count());
+    if Renderer::new(&gpu.device, &gpu.queue, Settings::with_size(w, h)).is_ok() {
+        let errors = packed_error(gpu, &buffers, &camera, w, h);
+        PACKED_ERRORS.lock().unwrap().push(format!("| {group_name} | {errors} |"));
+    }
     let mut group = c.benchmark_group(format!("raster/{scene_name}/{w}x{h}"));
-    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
 
     let variants: [(&str, Layer1Variant, Precision, &str); 7] = [
         ("raster.layer0", Layer1Variant::TwoPass, Precision::Full, "raster.layer0"),
@@ -77,7 +141,7 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, scene_name: &str, (w, h): (u32, u32
                 Duration::from_secs_f64(ms / 1e3)
             })
         });
-        record(&group_name, name, sum / count.max(1) as f64);
+        record(&group_name, name, sum, count);
     }
 
     // The same triangles through the hardware rasterizer, on the same device.
@@ -93,7 +157,13 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, scene_name: &str, (w, h): (u32, u32
             for _ in 0..iters {
                 timestamps.reset();
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                baseline.encode(&gpu.device, &mut encoder, &buffers, renderer.frame_buffer(), timestamps.render_pass("hardware.layer0"));
+                baseline.encode(
+                    &gpu.device,
+                    &mut encoder,
+                    &buffers,
+                    renderer.frame_buffer(),
+                    timestamps.render_pass("hardware.layer0"),
+                );
                 timestamps.resolve(&mut encoder);
                 gpu.queue.submit([encoder.finish()]);
                 ms += timestamps.read(&gpu.device).unwrap()[0].ms;
@@ -103,12 +173,13 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, scene_name: &str, (w, h): (u32, u32
             Duration::from_secs_f64(ms / 1e3)
         })
     });
-    record(&group_name, "hardware.layer0", sum / count.max(1) as f64);
+    record(&group_name, "hardware.layer0", sum, count);
     group.finish();
 }
 
 fn main() {
-    let gpu = Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
+    let gpu =
+        Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
     let sizes: Vec<(u32, u32)> = std::env::var("DEEP_GBUFFER_BENCH_SIZES")
         .unwrap_or_else(|_| "256x256,1920x1080".into())
         .split(',')
@@ -117,7 +188,8 @@ fn main() {
             (w.parse().unwrap(), h.parse().unwrap())
         })
         .collect();
-    let scenes = std::env::var("DEEP_GBUFFER_BENCH_SCENES").unwrap_or_else(|_| "cornell,engine".into());
+    let scenes =
+        std::env::var("DEEP_GBUFFER_BENCH_SCENES").unwrap_or_else(|_| "cornell,engine".into());
     let mut c = Criterion::default().configure_from_args();
     for scene in scenes.split(',') {
         for &size in &sizes {
@@ -126,19 +198,30 @@ fn main() {
     }
     c.final_summary();
 
-    let mut table = format!("Device: {}\n\n| scene | pass | GPU ms |\n|---|---|---:|\n", gpu.describe());
+    let mut table =
+        format!("Device: {}\n\n| scene | pass | GPU ms |\n|---|---|---:|\n", gpu.describe());
     let summary = SUMMARY.lock().unwrap();
     for (group, name, ms) in summary.iter() {
         table += &format!("| {group} | {name} | {ms:.3} |\n");
     }
     table += "\n| scene | compute layer 0 / hardware layer 0 | layer 1 (two-pass) / layer 0 |\n|---|---:|---:|\n";
-    let find = |g: &str, n: &str| summary.iter().find(|(gg, nn, _)| gg == g && nn == n).map(|x| x.2);
+    let find =
+        |g: &str, n: &str| summary.iter().find(|(gg, nn, _)| gg == g && nn == n).map(|x| x.2);
     let mut groups: Vec<&String> = summary.iter().map(|(g, _, _)| g).collect();
     groups.dedup();
     for g in groups {
-        if let (Some(l0), Some(hw), Some(l1)) = (find(g, "raster.layer0"), find(g, "hardware.layer0"), find(g, "raster.layer1 two-pass")) {
+        if let (Some(l0), Some(hw), Some(l1)) = (
+            find(g, "raster.layer0"),
+            find(g, "hardware.layer0"),
+            find(g, "raster.layer1 two-pass"),
+        ) {
             table += &format!("| {g} | {:.1} | {:.2} |\n", l0 / hw, l1 / l0);
         }
+    }
+    table += "\n| scene | normal angle max (rad) | normal angle mean (rad) | base colour max abs | emission max rel |\n|---|---:|---:|---:|---:|\n";
+    for row in PACKED_ERRORS.lock().unwrap().iter() {
+        table += row;
+        table += "\n";
     }
     println!("\n{table}");
     let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/raster-bench.md");

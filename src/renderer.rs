@@ -325,7 +325,8 @@ impl Renderer {
     ) -> Result<()> {
         gpu::scoped(device, "deep-gbuffer.frame", || {
             let label = Some("deep-gbuffer.frame");
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+            let mut encoder =
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
             self.encode(device, queue, &mut encoder, scene, camera)?;
             queue.submit([encoder.finish()]);
             Ok(())

@@ -71,6 +71,10 @@ fn dense_gltf_matches_cpu_reference() {
     let scene = Scene::load(&fixture("suzanne/Suzanne.gltf")).unwrap();
     let camera = scene.camera_or_default();
     assert_matches_cpu(&scene, &camera, Settings { dz: 0.01, ..settings(128, 96) });
+    // 121,496 triangles of a CAD model: many thin, many smaller than a pixel.
+    let engine = Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap();
+    let camera = engine.camera_or_default();
+    assert_matches_cpu(&engine, &camera, Settings { dz: 1.0, ..settings(96, 72) });
 }
 
 fn random_soup(seed: u64, count: usize, extent: f32) -> Vec<[Vec3; 3]> {

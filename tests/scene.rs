@@ -100,6 +100,42 @@ fn gltf_lights_camera_and_transforms() {
     assert_eq!(scene.materials.len(), 1);
 }
 
+/// The same document as a binary `.glb` (header, JSON chunk, BIN chunk).
+#[test]
+fn glb_loads() {
+    let dir = temp_dir("glb");
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let bin: Vec<u8> = positions.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let json = r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36}],
+      "bufferViews": [{"buffer": 0, "byteLength": 36}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}],
+      "materials": [{"doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1], "metallicFactor": 1, "roughnessFactor": 0.25}}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}], "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}]}"#;
+    let mut json = json.as_bytes().to_vec();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&bin);
+    let path = dir.join("tri.glb");
+    std::fs::write(&path, &glb).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    let m = &scene.materials[0];
+    assert!(m.double_sided);
+    assert_eq!((m.metallic, m.roughness, m.reflectivity), (1.0, 0.25, 0.75));
+    // A truncated file is an error, not a panic.
+    std::fs::write(&path, &glb[..30]).unwrap();
+    assert!(Scene::load(&path).is_err());
+}
+
 #[test]
 fn scenes_without_camera_or_lights_get_defaults() {
     let mut scene = Scene::load(&fixture("cornell/CornellBox-Original.obj")).unwrap();

@@ -8,9 +8,10 @@
 //   MEDIUM_TILES tiles (bin 0), more (bin 1).
 // bin_args: turns the bins' counts into indirect dispatch arguments.
 // raster_large: one 16x16 workgroup per (binned triangle, slice), one pixel per thread. Bin 0
-//   has one slice per triangle, walking its few tiles; bin 1 has LARGE_SLICES slices that
-//   share the tiles, so a screen-filling triangle costs about its pixels and no workgroup is
-//   launched for a slice without a tile.
+//   has one slice per triangle, walking its few tiles; in bin 1 a triangle has one slice per
+//   TILES_PER_SLICE tiles (at most LARGE_SLICES) that share its tiles, so a screen-filling
+//   triangle costs about its pixels, spread over many workgroups, and a slice without tiles
+//   returns before any work.
 //
 // Coverage is exact: pixel centres are tested with integer edge functions (exact 64-bit for
 // large triangles) and the top-left rule, so adjacent triangles neither crack nor overlap.
@@ -29,7 +30,9 @@
 
 const SUBPIXEL: i32 = 256;
 const SMALL_EXTENT: i32 = 16;
-const MEDIUM_TILES: u32 = 4u;
+const MEDIUM_TILES: u32 = 8u;
+// A bin-1 triangle gets one slice per TILES_PER_SLICE tiles, at most LARGE_SLICES.
+const TILES_PER_SLICE: u32 = 8u;
 const LARGE_SLICES: u32 = 32u;
 const MAX_POLY: u32 = 9u;
 
@@ -321,10 +324,6 @@ fn bin_args() {
     }
 }
 
-var<workgroup> wg_setup: Setup;
-var<workgroup> wg_triangle: u32;
-var<workgroup> wg_valid: u32;
-
 // Exact edge function of a -> b at point p (all in 1/256 pixels).
 fn edge_wide(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> vec2<u32> {
     return wide_sub(wide_mul(b.x - a.x, p.y - a.y), wide_mul(b.y - a.y, p.x - a.x));
@@ -355,39 +354,34 @@ fn tile_outside(s: Setup, lo: vec2<i32>, hi: vec2<i32>) -> bool {
     return tile_outside_edge(s.v1, s.v2, lo, hi) || tile_outside_edge(s.v2, s.v0, lo, hi) || tile_outside_edge(s.v0, s.v1, lo, hi);
 }
 
+// Every thread sets the triangle up itself: a little redundant arithmetic instead of a
+// workgroup barrier, which costs more on many devices (and far more on CPU drivers).
 @compute @workgroup_size(16, 16)
 fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let entry = wid.x + wid.y * 65535u;
-    if lid.x == 0u && lid.y == 0u {
-        wg_valid = 0u;
-        var e = vec2<u32>(0u);
-        if entry < atomicLoad(&bins[4u * BIN + 2u]) {
-            e = large[BIN * (arrayLength(&large) / 2u) + entry];
-        }
-        // Slices beyond the triangle's tile count have nothing to do: skip the set-up.
-        if wid.z < e.y {
-            let packed = e.x;
-            let t = packed >> 3u;
-            var poly: array<ClipVertex, MAX_POLY>;
-            let count = clip_triangle(t, &poly);
-            let k = packed & 7u;
-            if k + 2u < count {
-                let s = setup(t, &poly, k);
-                wg_setup = s;
-                wg_triangle = t;
-                wg_valid = select(0u, 1u, s.kind == 2u);
-            }
-        }
-    }
-    if workgroupUniformLoad(&wg_valid) == 0u {
+    if entry >= atomicLoad(&bins[4u * BIN + 2u]) {
         return;
     }
-    let s = wg_setup;
-    let t = wg_triangle;
+    let e = large[BIN * (arrayLength(&large) / 2u) + entry];
+    // Slices beyond the triangle's own slice count have nothing to do: skip the set-up.
+    let slices = clamp((e.y + TILES_PER_SLICE - 1u) / TILES_PER_SLICE, 1u, LARGE_SLICES);
+    if wid.z >= slices {
+        return;
+    }
+    let t = e.x >> 3u;
+    let k = e.x & 7u;
+    var poly: array<ClipVertex, MAX_POLY>;
+    let count = clip_triangle(t, &poly);
+    if k + 2u >= count {
+        return;
+    }
+    let s = setup(t, &poly, k);
+    if s.kind != 2u {
+        return;
+    }
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
     let tiles = (s.hi - s.lo) / 16 + 1;
     let tile_count = u32(tiles.x * tiles.y);
-    let slices = select(1u, LARGE_SLICES, BIN == 1u);
     for (var tile = wid.z; tile < tile_count; tile += slices) {
         let tile_lo = s.lo + vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16;
         if tile_outside(s, tile_lo, min(tile_lo + 15, s.hi)) {

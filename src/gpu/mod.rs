@@ -93,7 +93,10 @@ pub fn scoped<T>(device: &wgpu::Device, label: &str, f: impl FnOnce() -> Result<
     let errors = [pollster::block_on(memory.pop()), pollster::block_on(validation.pop())];
     let value = value?;
     match errors.into_iter().flatten().next() {
-        Some(e) => Err(Error::Gpu { label: label.to_string(), message: e.to_string().lines().collect::<Vec<_>>().join(" ") }),
+        Some(e) => Err(Error::Gpu {
+            label: label.to_string(),
+            message: e.to_string().lines().collect::<Vec<_>>().join(" "),
+        }),
         None => Ok(value),
     }
 }
