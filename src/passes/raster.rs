@@ -171,10 +171,10 @@ impl RasterPass {
             pass.set_pipeline(&p.args);
             pass.set_bind_group(0, &args, &[]);
             pass.dispatch_workgroups(1, 1, 1);
-            for bin in 0..2 {
-                pass.set_pipeline(&p.large[bin]);
-                pass.set_bind_group(0, &large[bin], &[]);
-                pass.dispatch_workgroups_indirect(t.args, bin as u64 * 16);
+            for (offset, (pipeline, group)) in p.large.iter().zip(&large).enumerate() {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups_indirect(t.args, offset as u64 * 16);
             }
         }
     }
