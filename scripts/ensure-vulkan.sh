@@ -12,7 +12,12 @@ has_icd() {
     return 1
 }
 
-if has_icd && ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1'; then
+has_loader() {
+    compgen -G "/usr/lib/*/libvulkan.so.1" > /dev/null || compgen -G "/usr/lib*/libvulkan.so.1" > /dev/null \
+        || compgen -G "/usr/local/lib/libvulkan.so.1" > /dev/null
+}
+
+if has_icd && has_loader; then
     exit 0
 fi
 install='apt-get update && apt-get install -y mesa-vulkan-drivers'
