@@ -127,7 +127,9 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
         ("raster.clear", Layer1Variant::TwoPass, Precision::Full, "raster.clear"),
     ];
     for (name, layer1, precision, pass) in variants {
-        let settings = Settings { layer1, precision, ..Settings::with_size(w, h) };
+        // Only the raster and resolve passes: obscurance has its own benchmark.
+        let ao = deep_gbuffer::AoSettings { enabled: false, ..Default::default() };
+        let settings = Settings { layer1, precision, ao, ..Settings::with_size(w, h) };
         let mut renderer = match Renderer::new(&gpu.device, &gpu.queue, settings) {
             Ok(r) => r,
             Err(e) => {

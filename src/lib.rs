@@ -34,4 +34,4 @@ pub use gbuffer::{GBufferLayer, GSample};
 pub use renderer::{Diagnostics, Renderer};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene};
-pub use settings::{AtomicPath, Layer1Variant, Precision, Settings};
+pub use settings::{AoSettings, AtomicPath, Layer1Variant, Precision, Settings};

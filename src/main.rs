@@ -7,8 +7,8 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
-    AtomicPath, Camera, Error, Layer1Variant, Precision, Renderer, Result, Scene, SceneBuffers,
-    Settings, output,
+    AoSettings, AtomicPath, Camera, Error, Layer1Variant, Precision, Renderer, Result, Scene,
+    SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -69,6 +69,18 @@ struct RenderArgs {
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
+    /// Turn ambient obscurance off.
+    #[arg(long)]
+    no_ao: bool,
+    /// Obscurance radius in scene units.
+    #[arg(long, default_value_t = AoSettings::default().radius)]
+    ao_radius: f32,
+    /// Obscurance taps per pixel.
+    #[arg(long, default_value_t = AoSettings::default().samples)]
+    ao_samples: u32,
+    /// Obscurance from layer 0 only (to compare with the two-layer estimator).
+    #[arg(long)]
+    ao_one_layer: bool,
 }
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -171,6 +183,13 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         layer1: args.layer1,
         precision: args.precision,
         atomics: args.atomics,
+        ao: AoSettings {
+            enabled: !args.no_ao,
+            radius: args.ao_radius,
+            samples: args.ao_samples,
+            two_layers: !args.ao_one_layer,
+            ..AoSettings::default()
+        },
         ..Settings::default()
     };
     settings.validate()?;
@@ -198,11 +217,21 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         );
     }
     let (w, h) = (settings.width, settings.height);
+    let av = match renderer.ao_buffer() {
+        Some(buffer) => Some(renderer.read_f32(&gpu.device, &gpu.queue, buffer)?),
+        None => None,
+    };
     if let Some(dir) = &args.layers {
         output::write_layers(dir, &layers)?;
+        if let Some(av) = &av {
+            let grey: Vec<Vec3> =
+                av.iter().take((w * h) as usize).map(|&v| Vec3::splat(v)).collect();
+            output::write_png_display(&dir.join("ao.png"), w, h, &grey)?;
+            output::write_exr(&dir.join("ao.exr"), w, h, &grey)?;
+        }
     }
     let view_dir = (camera.target - camera.eye).normalize();
-    let image = output::preview(&layers[0], view_dir);
+    let image = output::preview(&layers[0], view_dir, av.as_deref());
     if let Some(path) = &args.out {
         output::write_png_linear(path, w, h, &image)?;
     }

@@ -90,19 +90,22 @@ pub fn write_layers(dir: &Path, layers: &[GBufferLayer]) -> Result<()> {
     Ok(())
 }
 
-/// Layer 0 simply shaded: base colour lit by a headlight and a fixed key light, plus emission.
-pub fn preview(layer: &GBufferLayer, view_dir: Vec3) -> Vec<Vec3> {
+/// Layer 0 simply shaded: base colour lit by a headlight and a fixed key light, times the
+/// ambient visibility when given, plus emission.
+pub fn preview(layer: &GBufferLayer, view_dir: Vec3, av: Option<&[f32]>) -> Vec<Vec3> {
     let key = Vec3::new(0.3, 0.8, 0.5).normalize();
     layer
         .samples
         .iter()
-        .map(|s| {
+        .enumerate()
+        .map(|(i, s)| {
+            let visibility = av.and_then(|a| a.get(i)).copied().unwrap_or(1.0);
             if s.depth <= 0.0 {
                 return Vec3::splat(0.02);
             }
             let head = s.normal.dot(-view_dir).abs();
             let light = 0.15 + 0.55 * head + 0.3 * s.normal.dot(key).max(0.0);
-            s.base_color * light + s.emissive.min(Vec3::ONE)
+            s.base_color * light * visibility + s.emissive.min(Vec3::ONE)
         })
         .collect()
 }

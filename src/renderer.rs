@@ -4,7 +4,10 @@ use crate::SceneBuffers;
 use crate::gbuffer::{self, GBufferLayer};
 use crate::gpu::frame::CameraMatrices;
 use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
+use crate::passes::ao::{AoPass, AoUniform};
+use crate::passes::blur::BlurPass;
 use crate::passes::fill::FillPass;
+use crate::passes::pyramid::PyramidPass;
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
 use crate::passes::resolve::ResolvePass;
 use crate::scene::Camera;
@@ -45,6 +48,52 @@ pub struct Renderer {
     timestamps: Option<Timestamps>,
     passes: Vec<String>,
     last_frame: Option<FrameUniform>,
+    ao: Option<AoStage>,
+}
+
+/// The obscurance passes and their buffers (present when obscurance is enabled).
+struct AoStage {
+    pyramid: PyramidPass,
+    pyramids: [wgpu::Buffer; 2],
+    ao: AoPass,
+    uniform: wgpu::Buffer,
+    blur: BlurPass,
+    /// Raw AV, the blur's intermediate, blurred AV.
+    av: [wgpu::Buffer; 3],
+    two_layers: bool,
+}
+
+impl AoStage {
+    fn new(device: &wgpu::Device, s: &Settings) -> AoStage {
+        use wgpu::util::DeviceExt;
+        let two_layers = s.ao.two_layers && s.layers == 2;
+        let pyramid = PyramidPass::new(device, s.precision, s.width, s.height);
+        let size = pyramid.buffer_size();
+        let buffer = |label: &str, size: u64| {
+            gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty())
+        };
+        let pixels = u64::from(s.width) * u64::from(s.height) * 4;
+        AoStage {
+            pyramids: [
+                buffer("deep-gbuffer.pyramid.layer0", size),
+                buffer("deep-gbuffer.pyramid.layer1", size),
+            ],
+            ao: AoPass::new(device, s.precision, two_layers),
+            uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("deep-gbuffer.ao"),
+                contents: bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            blur: BlurPass::new(device, s.precision, s.ao.blur_radius),
+            av: [
+                buffer("deep-gbuffer.ao.raw", pixels),
+                buffer("deep-gbuffer.ao.blur", pixels),
+                buffer("deep-gbuffer.ao.av", pixels),
+            ],
+            pyramid,
+            two_layers,
+        }
+    }
 }
 
 impl Renderer {
@@ -156,6 +205,7 @@ impl Renderer {
             },
             passes: Vec::new(),
             last_frame: None,
+            ao: settings.ao.enabled.then(|| AoStage::new(device, &settings)),
             settings,
         })
     }
@@ -306,6 +356,43 @@ impl Renderer {
                 );
             }
         }
+        if let Some(ao) = &self.ao {
+            let size = (s.width, s.height);
+            {
+                let mut pass = begin(encoder, "pyramid");
+                let layers = if ao.two_layers { 2 } else { 1 };
+                for layer in 0..layers {
+                    ao.pyramid.encode(device, &mut pass, &self.gbuffer[layer], &ao.pyramids[layer]);
+                }
+            }
+            {
+                let mut pass = begin(encoder, "ao");
+                let pyramids = [&ao.pyramids[0], &ao.pyramids[1]];
+                ao.ao.encode(
+                    device,
+                    &mut pass,
+                    &self.frame,
+                    &ao.uniform,
+                    &self.gbuffer[0],
+                    pyramids,
+                    &ao.av[0],
+                    size,
+                );
+            }
+            if s.ao.blur_radius > 0 {
+                let mut pass = begin(encoder, "ao.blur");
+                ao.blur.encode(
+                    device,
+                    &mut pass,
+                    &self.frame,
+                    &self.gbuffer[0],
+                    &ao.av[0],
+                    &ao.av[1],
+                    &ao.av[2],
+                    size,
+                );
+            }
+        }
         if let Some(t) = &self.timestamps {
             t.resolve(encoder);
         }
@@ -377,6 +464,35 @@ impl Renderer {
             self.settings.height,
             self.settings.precision,
         ))
+    }
+
+    /// The ambient visibility AV in [0, 1] per pixel (f32, row-major; blurred unless the blur
+    /// radius is 0), or `None` when obscurance is off.
+    pub fn ao_buffer(&self) -> Option<&wgpu::Buffer> {
+        let ao = self.ao.as_ref()?;
+        Some(if self.settings.ao.blur_radius > 0 { &ao.av[2] } else { &ao.av[0] })
+    }
+
+    /// The obscurance before the blur, or `None` when obscurance is off.
+    pub fn ao_raw_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.ao.as_ref().map(|ao| &ao.av[0])
+    }
+
+    /// The depth pyramid of `layer` (levels packed as in
+    /// [`PyramidLayout`](crate::passes::pyramid::PyramidLayout)), or `None` when obscurance is off.
+    pub fn pyramid_buffer(&self, layer: usize) -> Option<&wgpu::Buffer> {
+        self.ao.as_ref().map(|ao| &ao.pyramids[layer.min(1)])
+    }
+
+    /// Reads an f32 per-pixel buffer such as [`ao_buffer`](Renderer::ao_buffer) back.
+    pub fn read_f32(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buffer: &wgpu::Buffer,
+    ) -> Result<Vec<f32>> {
+        let bytes = gpu::read_buffer(device, queue, buffer)?;
+        Ok(bytemuck::pod_collect_to_vec::<u8, f32>(&bytes[..bytes.len() / 4 * 4]))
     }
 
     /// Reads the raster counters of the last frame (waits for the GPU).

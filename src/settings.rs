@@ -39,6 +39,77 @@ pub enum AtomicPath {
     Int32,
 }
 
+/// Ambient obscurance (`wgsl/ao.wgsl`, documented there with its exact estimator).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AoSettings {
+    /// Run the obscurance passes.
+    pub enabled: bool,
+    /// World-space radius of the neighbourhood, in scene units.
+    pub radius: f32,
+    /// Taps per pixel.
+    pub samples: u32,
+    /// Bias β of the falloff, in scene units (suppresses self-occlusion on tessellated curves).
+    pub bias: f32,
+    /// Scale of the obscurance sum.
+    pub intensity: f32,
+    /// Take each tap's larger contribution from both layers (the deep G-buffer estimator);
+    /// `false` reads layer 0 only.
+    pub two_layers: bool,
+    /// Radius of the bilateral blur in pixels (0: no blur).
+    pub blur_radius: u32,
+}
+
+impl Default for AoSettings {
+    fn default() -> Self {
+        AoSettings {
+            enabled: true,
+            radius: 0.5,
+            samples: 11,
+            bias: 0.01,
+            intensity: 1.0,
+            two_layers: true,
+            blur_radius: 4,
+        }
+    }
+}
+
+impl AoSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err(Error::setting(
+                "ao.radius",
+                format!("{} (must be finite and > 0)", self.radius),
+            ));
+        }
+        if self.samples == 0 || self.samples > 256 {
+            return Err(Error::setting(
+                "ao.samples",
+                format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if !(self.bias.is_finite() && self.bias >= 0.0) {
+            return Err(Error::setting(
+                "ao.bias",
+                format!("{} (must be finite and >= 0)", self.bias),
+            ));
+        }
+        if !(self.intensity.is_finite() && self.intensity >= 0.0) {
+            return Err(Error::setting(
+                "ao.intensity",
+                format!("{} (must be finite and >= 0)", self.intensity),
+            ));
+        }
+        if self.blur_radius > 32 {
+            return Err(Error::setting(
+                "ao.blur_radius",
+                format!("{} (at most 32)", self.blur_radius),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Settings of a [`Renderer`](crate::Renderer).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -58,6 +129,8 @@ pub struct Settings {
     pub atomics: AtomicPath,
     /// Record GPU timestamps per pass (when the device has `TIMESTAMP_QUERY`).
     pub timings: bool,
+    /// Ambient obscurance.
+    pub ao: AoSettings,
 }
 
 impl Default for Settings {
@@ -71,6 +144,7 @@ impl Default for Settings {
             precision: Precision::Full,
             atomics: AtomicPath::Auto,
             timings: true,
+            ao: AoSettings::default(),
         }
     }
 }
@@ -100,6 +174,9 @@ impl Settings {
         }
         if !(self.dz >= 0.0 && self.dz.is_finite()) {
             return Err(Error::setting("dz", format!("{} (must be finite and >= 0)", self.dz)));
+        }
+        if self.ao.enabled {
+            self.ao.validate()?;
         }
         Ok(())
     }

@@ -44,7 +44,10 @@ fn render_writes_image_layers_and_timings() {
     assert!(json["adapter"].as_str().is_some_and(|a| !a.is_empty()));
     let names: Vec<&str> =
         json["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["raster.clear", "raster.layer0", "raster.layer1", "resolve"]);
+    assert_eq!(
+        names,
+        ["raster.clear", "raster.layer0", "raster.layer1", "resolve", "pyramid", "ao", "ao.blur"]
+    );
     let total: f64 =
         json["passes"].as_array().unwrap().iter().map(|p| p["ms"].as_f64().unwrap()).sum();
     assert!(total > 0.0);

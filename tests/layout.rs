@@ -3,10 +3,10 @@
 
 use deep_gbuffer::GpuMaterial;
 use deep_gbuffer::gpu::FrameUniform;
+use deep_gbuffer::passes::ao::AoUniform;
 
 fn wgsl_layout(file: &str, name: &str) -> (u32, Vec<(String, u32)>) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl").join(file);
-    let source = std::fs::read_to_string(path).unwrap();
+    let source = deep_gbuffer::gpu::shader_source(file, &[]);
     let module = naga::front::wgsl::parse_str(&source).unwrap();
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).unwrap();
@@ -73,4 +73,9 @@ fn material_matches_wgsl() {
             texture_height
         ]
     );
+}
+
+#[test]
+fn ao_uniform_matches_wgsl() {
+    check!(AoUniform, "ao.wgsl", "Ao", [radius, bias, intensity, samples, levels, offsets]);
 }

@@ -12,8 +12,10 @@ use deep_gbuffer::{AtomicPath, Layer1Variant, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 
+/// Raster tests need no obscurance passes.
 fn settings(width: u32, height: u32) -> Settings {
-    Settings { timings: false, ..Settings::with_size(width, height) }
+    let ao = deep_gbuffer::AoSettings { enabled: false, ..Default::default() };
+    Settings { timings: false, ao, ..Settings::with_size(width, height) }
 }
 
 /// Pixels where the GPU word differs from the CPU's, with a description of the first few.

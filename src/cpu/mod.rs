@@ -1,5 +1,8 @@
 //! CPU references of the kernels, written to read like the WGSL (same names, same loop order,
 //! same arithmetic order), so that a GPU/CPU mismatch points at one line.
 
+pub mod ao;
+pub mod blur;
+pub mod pyramid;
 pub mod raster;
 pub mod resolve;

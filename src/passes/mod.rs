@@ -1,6 +1,9 @@
 //! One module per kernel: its pipelines, bindings and `encode`.
 
+pub mod ao;
 pub mod baseline;
+pub mod blur;
 pub mod fill;
+pub mod pyramid;
 pub mod raster;
 pub mod resolve;

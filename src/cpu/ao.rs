@@ -1,0 +1,124 @@
+//! CPU reference of `wgsl/ao.wgsl`: two-layer ambient obscurance.
+
+use std::f32::consts::TAU;
+
+use glam::{Vec2, Vec3, Vec4Swizzles};
+
+use crate::gbuffer::GSample;
+use crate::gpu::FrameUniform;
+use crate::passes::pyramid::PyramidLayout;
+use crate::settings::AoSettings;
+
+const LOG_MAX_OFFSET: i32 = 3;
+const GOLDEN_TURNS: f32 = 0.381_966_01;
+
+fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
+    glam::Vec4::from_array(std::array::from_fn(|c| {
+        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
+    }))
+}
+
+/// As `view_position` in `wgsl/shared/frame.wgsl`.
+pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
+    let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);
+    if f.ortho != 0 {
+        return Vec3::new(
+            (ndc.x - f.proj[3][0]) / f.proj[0][0],
+            (ndc.y - f.proj[3][1]) / f.proj[1][1],
+            -d,
+        );
+    }
+    Vec3::new(ndc.x * d / f.proj[0][0], ndc.y * d / f.proj[1][1], -d)
+}
+
+/// As `texel_origin` in the WGSL: the level-0 pixel a pyramid texel was taken from.
+fn texel_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {
+    let mut p = t;
+    for l in (1..=level).rev() {
+        let below = layout.levels[l - 1];
+        p = (
+            (2 * p.0 + ((p.1 & 1) ^ 1)).min(below.width - 1),
+            (2 * p.1 + ((p.0 & 1) ^ 1)).min(below.height - 1),
+        );
+    }
+    p
+}
+
+fn pixel_hash(x: u32, y: u32) -> u32 {
+    let mut h = x.wrapping_mul(0x8da6_b343) ^ y.wrapping_mul(0xd816_3841);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7feb_352d);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846c_a68b);
+    h ^= h >> 16;
+    h
+}
+
+fn obscurance(s: &AoSettings, c: Vec3, n: Vec3, y: Vec3) -> f32 {
+    let v = y - c;
+    let vv = v.dot(v);
+    let r2 = s.radius * s.radius;
+    (1.0 - vv / r2).max(0.0) * ((v.dot(n) - s.bias) / (vv + 1e-4 * r2).sqrt()).max(0.0)
+}
+
+/// AV of every pixel. `pyramid1` is `None` for one-layer obscurance.
+pub fn ao(
+    f: &FrameUniform,
+    s: &AoSettings,
+    layer0: &[GSample],
+    layout: &PyramidLayout,
+    pyramid0: &[f32],
+    pyramid1: Option<&[f32]>,
+) -> Vec<f32> {
+    let mut out = vec![1.0; (f.width * f.height) as usize];
+    for y in 0..f.height {
+        for x in 0..f.width {
+            let p = (y * f.width + x) as usize;
+            let z = pyramid0[p];
+            if z.is_nan() || z <= 0.0 || s.samples == 0 || s.radius.is_nan() || s.radius <= 0.0 {
+                continue;
+            }
+            let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, z);
+            let n = mat_mul(&f.view, layer0[p].normal.extend(0.0).to_array()).xyz().normalize();
+            let mut scale = f.proj[1][1] * f.height as f32 * 0.5;
+            if f.ortho == 0 {
+                scale /= z;
+            }
+            let r_px = s.radius * scale;
+            let rotation = (pixel_hash(x, y) >> 20) as f32 / 4096.0;
+            let mut sum = 0.0;
+            for i in 0..s.samples {
+                let alpha = (i as f32 + 0.5) / s.samples as f32;
+                let angle = (i as f32 * GOLDEN_TURNS + rotation).fract() * TAU;
+                let h = r_px * alpha;
+                let tap =
+                    (Vec2::new(x as f32, y as f32) + 0.5 + h * Vec2::new(angle.cos(), angle.sin()))
+                        .floor();
+                let (tx, ty) = (tap.x as i32, tap.y as i32);
+                if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
+                    continue;
+                }
+                let level = ((h.max(1.0).log2().floor() as i32) - LOG_MAX_OFFSET)
+                    .clamp(0, layout.levels.len() as i32 - 1) as usize;
+                let l = layout.levels[level];
+                let q =
+                    (l.offset + ((ty as u32) >> level) * l.width + ((tx as u32) >> level)) as usize;
+                let origin =
+                    texel_origin(layout, level, ((tx as u32) >> level, (ty as u32) >> level));
+                let at = Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5;
+                let mut o = 0.0f32;
+                if pyramid0[q] > 0.0 {
+                    o = obscurance(s, c, n, view_position(f, at, pyramid0[q]));
+                }
+                if let Some(p1) = pyramid1
+                    && p1[q] > 0.0
+                {
+                    o = o.max(obscurance(s, c, n, view_position(f, at, p1[q])));
+                }
+                sum += o;
+            }
+            out[p] = (1.0 - s.intensity * 2.0 / s.samples as f32 * sum).clamp(0.0, 1.0);
+        }
+    }
+    out
+}

@@ -1,0 +1,65 @@
+//! `wgsl/blur.wgsl`: the separable bilateral blur (horizontal, then vertical).
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use crate::gpu;
+use crate::settings::Precision;
+
+/// Mirrors `struct Blur` in `wgsl/blur.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct BlurUniform {
+    radius: u32,
+    _pad: [u32; 3],
+}
+
+/// Both directions of the blur with one radius.
+pub struct BlurPass {
+    pipelines: [wgpu::ComputePipeline; 2],
+    uniform: wgpu::Buffer,
+}
+
+impl BlurPass {
+    /// Builds the pipelines for `precision` G-buffers and a blur `radius` in pixels.
+    pub fn new(device: &wgpu::Device, precision: Precision, radius: u32) -> Self {
+        let packed: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let mut vertical = packed.to_vec();
+        vertical.push("VERTICAL");
+        BlurPass {
+            pipelines: [
+                gpu::compute_pipeline(device, "blur", "blur_main", packed),
+                gpu::compute_pipeline(device, "blur", "blur_main", &vertical),
+            ],
+            uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("deep-gbuffer.blur"),
+                contents: bytemuck::bytes_of(&BlurUniform { radius, _pad: [0; 3] }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+        }
+    }
+
+    /// Records `source` -> `scratch` (horizontal) -> `target` (vertical).
+    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        pass: &mut wgpu::ComputePass<'_>,
+        frame: &wgpu::Buffer,
+        gbuffer0: &wgpu::Buffer,
+        source: &wgpu::Buffer,
+        scratch: &wgpu::Buffer,
+        target: &wgpu::Buffer,
+        size: (u32, u32),
+    ) {
+        for (pipeline, (from, to)) in
+            self.pipelines.iter().zip([(source, scratch), (scratch, target)])
+        {
+            let entries = [(0, frame), (1, &self.uniform), (2, gbuffer0), (3, from), (4, to)];
+            let group = gpu::bind_group(device, "deep-gbuffer.blur", pipeline, &entries);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        }
+    }
+}

@@ -1,0 +1,127 @@
+//! Two-layer ambient obscurance and its blur, against the CPU references and simple geometry.
+
+mod common;
+
+use common::{gpu, render, soup};
+use deep_gbuffer::cpu::{ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid};
+use deep_gbuffer::passes::pyramid::PyramidLayout;
+use deep_gbuffer::{AoSettings, Camera, Scene, Settings};
+use glam::Vec3;
+
+/// A tap's pixel comes from floor(position + r cos/sin); the GPU's cos, sin and log2 differ from
+/// Rust's in the last bits, so a tap lying within an ulp of a pixel border can land on the
+/// neighbouring pixel and change that pixel's AV by up to 2 * intensity / N. Such pixels must
+/// stay rare; every other pixel agrees to f32 rounding.
+const AO_TOLERANCE: f32 = 1e-4;
+const AO_FLIPPED_FRACTION: f64 = 0.01;
+
+fn settings(w: u32, h: u32, ao: AoSettings) -> Settings {
+    Settings { timings: false, ao, ..Settings::with_size(w, h) }
+}
+
+fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
+    let (w, h) = (s.width, s.height);
+    let ao = s.ao.clone();
+    let r = render(scene, camera, s);
+    let g = gpu();
+    let layout = PyramidLayout::new(w, h);
+    let layers = [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap());
+    let pyramids = [0, 1].map(|l| {
+        let depth: Vec<f32> = layers[l].samples.iter().map(|s| s.depth).collect();
+        cpu_pyramid::pyramid(&depth, &layout)
+    });
+    let p1 = ao.two_layers.then_some(&pyramids[1][..]);
+    let expected = cpu_ao::ao(&r.frame, &ao, &layers[0].samples, &layout, &pyramids[0], p1);
+    let raw =
+        r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_raw_buffer().unwrap()).unwrap();
+    let flipped =
+        raw.iter().zip(&expected).filter(|(a, b)| (**a - **b).abs() > AO_TOLERANCE).count();
+    assert!(
+        (flipped as f64) <= AO_FLIPPED_FRACTION * raw.len() as f64,
+        "{flipped} of {} pixels differ from the CPU reference",
+        raw.len()
+    );
+    assert!(raw.iter().all(|v| (0.0..=1.0).contains(v)), "AV in [0, 1]");
+
+    // The blur, from the GPU's own raw AV, against the CPU blur.
+    let horizontal =
+        cpu_blur::blur(w, h, ao.blur_radius, false, &layers[0].samples, &raw[..(w * h) as usize]);
+    let blurred = cpu_blur::blur(w, h, ao.blur_radius, true, &layers[0].samples, &horizontal);
+    let actual = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
+    for (p, (a, b)) in actual.iter().zip(&blurred).enumerate() {
+        // exp() and the weighted sum differ by f32 rounding only.
+        assert!((a - b).abs() <= 1e-4, "blur at pixel {p}: gpu {a} cpu {b}");
+    }
+    actual[..(w * h) as usize].to_vec()
+}
+
+#[test]
+fn cornell_matches_cpu_reference() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    for two_layers in [true, false] {
+        let ao = AoSettings { two_layers, radius: 0.4, samples: 12, ..Default::default() };
+        let av = compare_with_cpu(&scene, &camera, settings(80, 60, ao));
+        let mean = av.iter().sum::<f32>() / av.len() as f32;
+        assert!(mean < 0.98 && mean > 0.3, "the box is partly obscured (mean AV {mean})");
+    }
+}
+
+#[test]
+fn packed_gbuffer_gives_the_same_obscurance() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let ao = AoSettings { radius: 0.4, ..Default::default() };
+    let packed = Settings { precision: deep_gbuffer::Precision::Packed, ..settings(64, 48, ao) };
+    compare_with_cpu(&scene, &camera, packed);
+}
+
+#[test]
+fn an_open_flat_plane_is_not_obscured() {
+    let plane = [
+        [Vec3::new(-50.0, 0.0, -50.0), Vec3::new(-50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, 50.0)],
+        [Vec3::new(-50.0, 0.0, -50.0), Vec3::new(50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, -50.0)],
+    ];
+    let scene = soup(&plane, false);
+    let camera =
+        Camera::perspective(Vec3::new(0.0, 2.0, 4.0), Vec3::new(0.0, 0.0, -2.0), 60.0, 0.1);
+    let av = compare_with_cpu(
+        &scene,
+        &camera,
+        settings(64, 48, AoSettings { radius: 1.0, ..Default::default() }),
+    );
+    assert!(av.iter().all(|&v| v == 1.0), "min AV {}", av.iter().copied().fold(1.0, f32::min));
+}
+
+#[test]
+fn the_second_layer_adds_the_occlusion_hidden_behind_objects() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let base = AoSettings { radius: 0.5, blur_radius: 0, ..Default::default() };
+    let one = compare_with_cpu(
+        &scene,
+        &camera,
+        settings(80, 60, AoSettings { two_layers: false, ..base.clone() }),
+    );
+    let two = compare_with_cpu(&scene, &camera, settings(80, 60, base));
+    // The two-layer estimator takes the larger contribution per tap: never less occlusion.
+    assert!(one.iter().zip(&two).all(|(a, b)| b <= a));
+    let changed = one.iter().zip(&two).filter(|(a, b)| **a - **b > 0.02).count();
+    assert!(changed > 20, "layer 1 (the boxes' hidden sides) darkens some pixels: {changed}");
+}
+
+#[test]
+fn invalid_obscurance_settings_are_refused() {
+    let g = gpu();
+    for (ao, name) in [
+        (AoSettings { radius: -1.0, ..Default::default() }, "ao.radius"),
+        (AoSettings { samples: 0, ..Default::default() }, "ao.samples"),
+        (AoSettings { intensity: f32::NAN, ..Default::default() }, "ao.intensity"),
+    ] {
+        match deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(8, 8, ao)) {
+            Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("{name} accepted"),
+        }
+    }
+}

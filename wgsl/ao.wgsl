@@ -1,0 +1,149 @@
+// Two-layer ambient obscurance (Scalable Ambient Obscurance on a deep G-buffer), one thread per
+// pixel, written to AV in [0, 1] (1: fully visible).
+//
+// For the layer-0 surface X at the pixel (view-space position C, view-space normal n), N taps
+// lie on a golden-angle spiral (a low-discrepancy set of directions for any N) of projected
+// radius r_px = radius * scale / z, rotated per pixel;
+// tap i is at distance r_px * (i + 0.5) / N and reads depth from pyramid level
+// clamp(floor(log2(distance)) - LOG_MAX_OFFSET, 0, levels - 1), reconstructing the point at the
+// pixel that texel came from (so an open plane gives exactly zero). Each tap gives, for each layer's
+// point Y at the tap (v = Y - C):
+//     O(X, Y) = max(1 - v.v / r^2, 0) * max((v.n - beta) / sqrt(v.v + eps), 0),   eps = 1e-4 r^2
+// and contributes the larger of the two layers' values (only layer 0 without TWO_LAYERS), so a
+// thin object in front no longer hides what lies behind it. Then
+//     AV = clamp(1 - intensity * 2 / N * sum_i O_i, 0, 1),
+// the normalisation of Scalable Ambient Obscurance (McGuire et al. 2012) that the deep
+// G-buffer paper also uses. src/cpu/ao.rs is the same on the CPU.
+// defines: PACKED TWO_LAYERS
+
+#include "shared/frame.wgsl"
+#include "shared/gbuffer.wgsl"
+
+const LOG_MAX_OFFSET: i32 = 3;
+// The golden angle in turns (1 - 1 / phi).
+const GOLDEN_TURNS: f32 = 0.381966011;
+const TAU: f32 = 6.28318531;
+
+// Mirrors `AoUniform` in src/passes/ao.rs.
+struct Ao {
+    radius: f32,
+    bias: f32,
+    intensity: f32,
+    samples: u32,
+    // Pyramid levels and their offsets in the packed pyramid buffers (up to 8).
+    levels: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    offsets: array<vec4<u32>, 2>,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> ao: Ao;
+@group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
+@group(0) @binding(3) var<storage, read> pyramid0: array<f32>;
+#if TWO_LAYERS
+@group(0) @binding(4) var<storage, read> pyramid1: array<f32>;
+#endif
+@group(0) @binding(5) var<storage, read_write> av: array<f32>;
+
+fn level_offset(level: u32) -> u32 {
+    return ao.offsets[level / 4u][level % 4u];
+}
+
+fn level_size(level: u32) -> vec2<u32> {
+    var size = vec2<u32>(frame.width, frame.height);
+    for (var i = 0u; i < level; i++) {
+        size = (size + 1u) / 2u;
+    }
+    return size;
+}
+
+// The full-resolution pixel whose depth texel t of `level` holds (the rotated-grid choices of
+// wgsl/pyramid.wgsl followed back down), so a tap's point is reconstructed where it really is.
+fn texel_origin(level: u32, t: vec2<u32>) -> vec2<u32> {
+    var p = t;
+    for (var l = level; l > 0u; l--) {
+        let below = level_size(l - 1u);
+        p = min(vec2<u32>(2u * p.x + ((p.y & 1u) ^ 1u), 2u * p.y + ((p.x & 1u) ^ 1u)), below - 1u);
+    }
+    return p;
+}
+
+fn normal_at(p: u32) -> vec3<f32> {
+#if PACKED
+    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]).normal;
+#else
+    return gbuffer[p * G_WORDS].yzw;
+#endif
+}
+
+// Per-pixel rotation of the spiral: an integer hash (exact on every device), 12 bits of turns.
+fn pixel_hash(pixel: vec2<u32>) -> u32 {
+    var h = (pixel.x * 0x8da6b343u) ^ (pixel.y * 0xd8163841u);
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    h ^= h >> 16u;
+    return h;
+}
+
+fn obscurance(c: vec3<f32>, n: vec3<f32>, y: vec3<f32>) -> f32 {
+    let v = y - c;
+    let vv = dot(v, v);
+    let r2 = ao.radius * ao.radius;
+    return max(1.0 - vv / r2, 0.0) * max((dot(v, n) - ao.bias) / sqrt(vv + 1e-4 * r2), 0.0);
+}
+
+fn visibility(pixel: vec2<u32>) -> f32 {
+    let p = pixel.y * frame.width + pixel.x;
+    let z = pyramid0[p];
+    if !(z > 0.0) || ao.samples == 0u || !(ao.radius > 0.0) {
+        return 1.0;
+    }
+    let c = view_position(frame, vec2<f32>(pixel) + 0.5, z);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(normal_at(p), 0.0)).xyz);
+    // Pixels per scene unit at this depth.
+    var scale = frame.proj[1].y * f32(frame.height) * 0.5;
+    if frame.ortho == 0u {
+        scale /= z;
+    }
+    let r_px = ao.radius * scale;
+    let rotation = f32(pixel_hash(pixel) >> 20u) / 4096.0;
+    var sum = 0.0;
+    for (var i = 0u; i < ao.samples; i++) {
+        let alpha = (f32(i) + 0.5) / f32(ao.samples);
+        let angle = fract(f32(i) * GOLDEN_TURNS + rotation) * TAU;
+        let h = r_px * alpha;
+        let tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + h * vec2<f32>(cos(angle), sin(angle))));
+        if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
+            continue;
+        }
+        let level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - LOG_MAX_OFFSET, 0, i32(ao.levels) - 1));
+        let t = vec2<u32>(tap) >> vec2<u32>(level);
+        let q = level_offset(level) + t.y * level_size(level).x + t.x;
+        let at = vec2<f32>(texel_origin(level, t)) + 0.5;
+        var o = 0.0;
+        let z0 = pyramid0[q];
+        if z0 > 0.0 {
+            o = obscurance(c, n, view_position(frame, at, z0));
+        }
+#if TWO_LAYERS
+        let z1 = pyramid1[q];
+        if z1 > 0.0 {
+            o = max(o, obscurance(c, n, view_position(frame, at, z1)));
+        }
+#endif
+        sum += o;
+    }
+    return clamp(1.0 - ao.intensity * 2.0 / f32(ao.samples) * sum, 0.0, 1.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    av[gid.y * frame.width + gid.x] = visibility(gid.xy);
+}

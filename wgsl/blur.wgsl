@@ -1,0 +1,76 @@
+// Separable depth- and normal-aware (bilateral) blur of a scalar image, one direction per
+// dispatch (VERTICAL or not). A tap's weight is a Gaussian of its distance, times
+// max(0, 1 - |z' - z| / (DEPTH_TOLERANCE z)) so nothing bleeds across depth edges, times
+// max(0, n.n')^8 so nothing bleeds across creases; pixels without a surface are skipped.
+// src/cpu/blur.rs is the same on the CPU.
+// defines: PACKED VERTICAL
+
+#include "shared/frame.wgsl"
+#include "shared/gbuffer.wgsl"
+
+const DEPTH_TOLERANCE: f32 = 0.05;
+
+// Mirrors `BlurUniform` in src/passes/blur.rs.
+struct Blur {
+    radius: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> blur: Blur;
+@group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
+@group(0) @binding(3) var<storage, read> source: array<f32>;
+@group(0) @binding(4) var<storage, read_write> blurred: array<f32>;
+
+fn sample_at(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u], gbuffer[p * G_WORDS + 2u], gbuffer[p * G_WORDS + 3u]);
+#endif
+}
+
+@compute @workgroup_size(8, 8)
+fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let center = sample_at(p);
+    if !(center.depth > 0.0) || blur.radius == 0u {
+        blurred[p] = source[p];
+        return;
+    }
+#if VERTICAL
+    let step = vec2<i32>(0, 1);
+#else
+    let step = vec2<i32>(1, 0);
+#endif
+    let r = i32(blur.radius);
+    let sigma = max(f32(r), 1.0) * 0.5;
+    var sum = 0.0;
+    var weights = 0.0;
+    for (var k = -r; k <= r; k++) {
+        let tap = vec2<i32>(gid.xy) + step * k;
+        if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
+            continue;
+        }
+        let q = u32(tap.y) * frame.width + u32(tap.x);
+        let s = sample_at(q);
+        if !(s.depth > 0.0) {
+            continue;
+        }
+        let fk = f32(k);
+        let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
+        let depth_weight = max(0.0, 1.0 - abs(s.depth - center.depth) / (DEPTH_TOLERANCE * center.depth));
+        let n = max(dot(s.normal, center.normal), 0.0);
+        let n2 = n * n;
+        let n4 = n2 * n2;
+        let w = gauss * depth_weight * n4 * n4;
+        sum += w * source[q];
+        weights += w;
+    }
+    blurred[p] = select(source[p], sum / weights, weights > 0.0);
+}
