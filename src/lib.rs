@@ -25,13 +25,15 @@ pub mod gbuffer;
 pub mod gpu;
 pub mod output;
 pub mod passes;
+pub mod plan;
 mod renderer;
 pub mod scene;
 pub mod settings;
 
 pub use error::{Error, Result};
 pub use gbuffer::{GBufferLayer, GSample};
+pub use plan::{Effects, Plan};
 pub use renderer::{Diagnostics, Renderer};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
-pub use scene::{Camera, Projection, Scene};
+pub use scene::{Camera, Projection, Scene, SceneInfo};
 pub use settings::{AoSettings, AtomicPath, Layer1Variant, Precision, Settings};

@@ -7,8 +7,8 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
-    AoSettings, AtomicPath, Camera, Error, Layer1Variant, Precision, Renderer, Result, Scene,
-    SceneBuffers, Settings, output,
+    AoSettings, AtomicPath, Camera, Effects, Error, Layer1Variant, Precision, Renderer, Result,
+    Scene, SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -69,6 +69,15 @@ struct RenderArgs {
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
+    /// Print the plan: which passes the frame runs, and why the others do not.
+    #[arg(long)]
+    plan: bool,
+    /// Effects to run: `auto` (all the scene calls for) or a list such as `ao,direct`.
+    #[arg(long, default_value = "auto")]
+    effects: String,
+    /// Exposure (a factor on the HDR image before the tone map of --out).
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
     /// Turn ambient obscurance off.
     #[arg(long)]
     no_ao: bool,
@@ -190,9 +199,16 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             two_layers: !args.ao_one_layer,
             ..AoSettings::default()
         },
+        effects: Effects::parse(&args.effects)?,
         ..Settings::default()
     };
     settings.validate()?;
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        return Err(Error::InvalidSetting {
+            name: "exposure",
+            message: format!("{} (must be finite and > 0)", args.exposure),
+        });
+    }
     let mut scene = Scene::from_spec(&args.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -205,8 +221,12 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;
+    if args.plan {
+        println!("{}", renderer.plan(&buffers));
+    }
     renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
-    let layers = (0..settings.layers as usize)
+    let layer_count = renderer.last_plan().map_or(1, |p| p.layers as usize);
+    let layers = (0..layer_count)
         .map(|l| renderer.read_gbuffer(&gpu.device, &gpu.queue, l))
         .collect::<Result<Vec<_>>>()?;
     let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue)?;
@@ -230,10 +250,10 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             output::write_exr(&dir.join("ao.exr"), w, h, &grey)?;
         }
     }
-    let view_dir = (camera.target - camera.eye).normalize();
-    let image = output::preview(&layers[0], view_dir, av.as_deref());
+    let hdr_buffer = renderer.hdr_buffer().expect("a frame was rendered");
+    let image = renderer.read_rgb(&gpu.device, &gpu.queue, hdr_buffer)?;
     if let Some(path) = &args.out {
-        output::write_png_linear(path, w, h, &image)?;
+        output::write_png_linear(path, w, h, &output::tonemap(&image, args.exposure))?;
     }
     if let Some(path) = &args.exr {
         output::write_exr(path, w, h, &image)?;
@@ -256,7 +276,12 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         let json = serde_json::to_string_pretty(&file).expect("plain data serializes");
         std::fs::write(path, json).map_err(|e| Error::Io { path: path.clone(), source: e })?;
     }
-    if args.out.is_none() && args.exr.is_none() && args.layers.is_none() && args.timings.is_none() {
+    if args.out.is_none()
+        && args.exr.is_none()
+        && args.layers.is_none()
+        && args.timings.is_none()
+        && !args.plan
+    {
         eprintln!("rendered {w}x{h}; nothing written (give --out, --exr, --layers or --timings)");
     }
     Ok(())

@@ -90,22 +90,13 @@ pub fn write_layers(dir: &Path, layers: &[GBufferLayer]) -> Result<()> {
     Ok(())
 }
 
-/// Layer 0 simply shaded: base colour lit by a headlight and a fixed key light, times the
-/// ambient visibility when given, plus emission.
-pub fn preview(layer: &GBufferLayer, view_dir: Vec3, av: Option<&[f32]>) -> Vec<Vec3> {
-    let key = Vec3::new(0.3, 0.8, 0.5).normalize();
-    layer
-        .samples
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let visibility = av.and_then(|a| a.get(i)).copied().unwrap_or(1.0);
-            if s.depth <= 0.0 {
-                return Vec3::splat(0.02);
-            }
-            let head = s.normal.dot(-view_dir).abs();
-            let light = 0.15 + 0.55 * head + 0.3 * s.normal.dot(key).max(0.0);
-            s.base_color * light * visibility + s.emissive.min(Vec3::ONE)
+/// The tone map of `--out`: exposure, then the ACES filmic curve fitted by Narkowicz (2015),
+/// per channel, to [0, 1] linear (sRGB encoding follows when written).
+pub fn tonemap(hdr: &[Vec3], exposure: f32) -> Vec<Vec3> {
+    hdr.iter()
+        .map(|c| {
+            let x = (*c * exposure).max(Vec3::ZERO);
+            ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(Vec3::ZERO, Vec3::ONE)
         })
         .collect()
 }

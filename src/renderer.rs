@@ -6,10 +6,13 @@ use crate::gpu::frame::CameraMatrices;
 use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
 use crate::passes::ao::{AoPass, AoUniform};
 use crate::passes::blur::BlurPass;
+use crate::passes::composite::CompositePass;
+use crate::passes::direct::DirectPass;
 use crate::passes::fill::FillPass;
 use crate::passes::pyramid::PyramidPass;
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
 use crate::passes::resolve::ResolvePass;
+use crate::plan::{Plan, Reason};
 use crate::scene::Camera;
 use crate::settings::{AtomicPath, Layer1Variant, Settings};
 use crate::{Error, Result};
@@ -49,6 +52,31 @@ pub struct Renderer {
     passes: Vec<String>,
     last_frame: Option<FrameUniform>,
     ao: Option<AoStage>,
+    shading: Option<ShadingStage>,
+    plan: Option<Plan>,
+}
+
+/// Direct light and the composite, and their images.
+struct ShadingStage {
+    direct: DirectPass,
+    composite: [CompositePass; 2],
+    /// Direct radiance and the HDR composite, `vec4<f32>` per pixel.
+    radiance: wgpu::Buffer,
+    hdr: wgpu::Buffer,
+}
+
+impl ShadingStage {
+    fn new(device: &wgpu::Device, s: &Settings) -> ShadingStage {
+        let bytes = u64::from(s.width) * u64::from(s.height) * 16;
+        let buffer =
+            |label: &str| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+        ShadingStage {
+            direct: DirectPass::new(device, s.precision),
+            composite: [false, true].map(|ao| CompositePass::new(device, s.precision, ao)),
+            radiance: buffer("deep-gbuffer.direct.radiance"),
+            hdr: buffer("deep-gbuffer.composite.hdr"),
+        }
+    }
 }
 
 /// The obscurance passes and their buffers (present when obscurance is enabled).
@@ -64,9 +92,8 @@ struct AoStage {
 }
 
 impl AoStage {
-    fn new(device: &wgpu::Device, s: &Settings) -> AoStage {
+    fn new(device: &wgpu::Device, s: &Settings, two_layers: bool) -> AoStage {
         use wgpu::util::DeviceExt;
-        let two_layers = s.ao.two_layers && s.layers == 2;
         let pyramid = PyramidPass::new(device, s.precision, s.width, s.height);
         let size = pyramid.buffer_size();
         let buffer = |label: &str, size: u64| {
@@ -205,7 +232,9 @@ impl Renderer {
             },
             passes: Vec::new(),
             last_frame: None,
-            ao: settings.ao.enabled.then(|| AoStage::new(device, &settings)),
+            ao: None,
+            shading: None,
+            plan: None,
             settings,
         })
     }
@@ -223,6 +252,51 @@ impl Renderer {
     /// Forgets the previous frame (a camera cut): the next frame rasterizes layer 1 exactly.
     pub fn reset_history(&mut self) {
         self.history = None;
+    }
+
+    /// The plan for `scene` under this renderer's settings (what [`encode`](Renderer::encode)
+    /// will run). The first frame of a one-pass layer-1 variant rasterizes the layers in two
+    /// passes (`raster.layer0`, `raster.layer1`) instead of `raster.layers`.
+    pub fn plan(&self, scene: &SceneBuffers) -> Plan {
+        let mut plan = Plan::new(scene.info(), &self.settings);
+        if plan.layers == 2
+            && self.history.is_none()
+            && let Some(i) = plan.passes.iter().position(|p| p == "raster.layers")
+        {
+            {
+                plan.passes
+                    .splice(i..=i, ["raster.layer0".to_string(), "raster.layer1".to_string()]);
+            }
+        }
+        plan
+    }
+
+    /// The plan of the last [`encode`](Renderer::encode).
+    pub fn last_plan(&self) -> Option<&Plan> {
+        self.plan.as_ref()
+    }
+
+    /// The HDR image of the last frame: `vec4<f32>` per pixel, linear radiance (a = 1 on
+    /// surfaces, 0 on the sky).
+    pub fn hdr_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.shading.as_ref().map(|s| &s.hdr)
+    }
+
+    /// The direct radiance of the last frame (`vec4<f32>` per pixel; zero when no light runs).
+    pub fn direct_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.shading.as_ref().map(|s| &s.radiance)
+    }
+
+    /// Reads a `vec4<f32>` per-pixel image (HDR, direct radiance) back as rgb.
+    pub fn read_rgb(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buffer: &wgpu::Buffer,
+    ) -> Result<Vec<glam::Vec3>> {
+        let values = self.read_f32(device, queue, buffer)?;
+        let n = (self.settings.width * self.settings.height) as usize;
+        Ok(values.chunks_exact(4).take(n).map(|c| glam::Vec3::new(c[0], c[1], c[2])).collect())
     }
 
     /// The frame constants of the last [`encode`](Renderer::encode): what the CPU references
@@ -254,6 +328,16 @@ impl Renderer {
         camera: &Camera,
     ) -> Result<()> {
         camera.validate()?;
+        let plan = self.plan(scene);
+        let ao_two_layers = plan.ao_two_layers;
+        if plan.ao == Reason::Runs && self.ao.as_ref().is_none_or(|a| a.two_layers != ao_two_layers)
+        {
+            self.ao = Some(AoStage::new(device, &self.settings, ao_two_layers));
+        }
+        if self.shading.is_none() {
+            self.shading = Some(ShadingStage::new(device, &self.settings));
+        }
+        let layers = plan.layers as usize;
         let s = &self.settings;
         let current = CameraMatrices::new(camera, s.width, s.height);
         let previous = self.history.unwrap_or(current);
@@ -278,8 +362,7 @@ impl Renderer {
         }
         encoder.clear_buffer(&self.bins, 0, None);
 
-        let one_pass =
-            s.layers == 2 && s.layer1 != Layer1Variant::TwoPass && self.history.is_some();
+        let one_pass = layers == 2 && s.layer1 != Layer1Variant::TwoPass && self.history.is_some();
         let write = 1 - self.last;
         let (vis0, prev_vis0) = (&self.vis0[write], &self.vis0[self.last]);
         let large = self.large.as_ref().expect("allocated above");
@@ -314,7 +397,7 @@ impl Renderer {
         {
             let mut pass = begin(encoder, "raster.clear");
             self.fill.encode(device, &mut pass, vis0, u32::MAX);
-            if s.layers == 2 {
+            if layers == 2 {
                 self.fill.encode(device, &mut pass, &self.vis1, u32::MAX);
             }
         }
@@ -334,7 +417,7 @@ impl Renderer {
                     &targets(Some(vis0), None, None),
                 );
             }
-            if s.layers == 2 {
+            if layers == 2 {
                 let mut pass = begin(encoder, "raster.layer1");
                 let t = targets(None, Some(&self.vis1), Some(vis0));
                 self.raster.encode(device, &mut pass, scene, RasterMode::Layer1, &t);
@@ -342,8 +425,7 @@ impl Renderer {
         }
         {
             let mut pass = begin(encoder, "resolve");
-            let layers = [vis0, &self.vis1];
-            for (layer, vis) in layers.iter().enumerate().take(s.layers as usize) {
+            for (layer, vis) in [vis0, &self.vis1].iter().enumerate().take(layers) {
                 self.resolve.encode(
                     device,
                     &mut pass,
@@ -356,8 +438,9 @@ impl Renderer {
                 );
             }
         }
-        if let Some(ao) = &self.ao {
-            let size = (s.width, s.height);
+        let size = (s.width, s.height);
+        let ao_stage = self.ao.as_ref().filter(|_| plan.ao == Reason::Runs);
+        if let Some(ao) = ao_stage {
             {
                 let mut pass = begin(encoder, "pyramid");
                 let layers = if ao.two_layers { 2 } else { 1 };
@@ -393,9 +476,43 @@ impl Renderer {
                 );
             }
         }
+        let shading = self.shading.as_ref().expect("created above");
+        if plan.direct == Reason::Runs {
+            let mut pass = begin(encoder, "direct");
+            shading.direct.encode(
+                device,
+                &mut pass,
+                &self.frame,
+                scene,
+                &self.gbuffer[0],
+                &shading.radiance,
+                size,
+            );
+        } else {
+            encoder.clear_buffer(&shading.radiance, 0, None);
+        }
+        {
+            let mut pass = begin(encoder, "composite");
+            let av = ao_stage.map(|ao| if s.ao.blur_radius > 0 { &ao.av[2] } else { &ao.av[0] });
+            let composite = &shading.composite[usize::from(av.is_some())];
+            let ambient = scene.info().ambient;
+            composite.encode(
+                device,
+                &mut pass,
+                &self.frame,
+                ambient,
+                &self.gbuffer[0],
+                &shading.radiance,
+                av,
+                &shading.hdr,
+                size,
+            );
+        }
         if let Some(t) = &self.timestamps {
             t.resolve(encoder);
         }
+        debug_assert_eq!(passes, plan.passes, "the recorded passes are the plan's");
+        self.plan = Some(plan);
         self.passes = passes;
         self.last = write;
         self.history = Some(current);
@@ -469,6 +586,7 @@ impl Renderer {
     /// The ambient visibility AV in [0, 1] per pixel (f32, row-major; blurred unless the blur
     /// radius is 0), or `None` when obscurance is off.
     pub fn ao_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.plan.as_ref().filter(|p| p.ao == Reason::Runs)?;
         let ao = self.ao.as_ref()?;
         Some(if self.settings.ao.blur_radius > 0 { &ao.av[2] } else { &ao.av[0] })
     }

@@ -117,7 +117,8 @@ pub struct Settings {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// 1 or 2 G-buffer layers.
+    /// G-buffer layers: 0 lets the [`Plan`](crate::plan::Plan) decide (2 when an effect reads
+    /// layer 1, else 1); 1 or 2 forces that many (2: for a host that reads layer 1 itself).
     pub layers: u32,
     /// Minimum separation Δz of layer 1 behind layer 0, in scene units (0: second-nearest).
     pub dz: f32,
@@ -131,6 +132,8 @@ pub struct Settings {
     pub timings: bool,
     /// Ambient obscurance.
     pub ao: AoSettings,
+    /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
+    pub effects: crate::plan::Effects,
 }
 
 impl Default for Settings {
@@ -138,13 +141,14 @@ impl Default for Settings {
         Settings {
             width: 640,
             height: 480,
-            layers: 2,
+            layers: 0,
             dz: 0.05,
             layer1: Layer1Variant::TwoPass,
             precision: Precision::Full,
             atomics: AtomicPath::Auto,
             timings: true,
             ao: AoSettings::default(),
+            effects: crate::plan::Effects::default(),
         }
     }
 }
@@ -169,8 +173,11 @@ impl Settings {
                 format!("{}x{} exceeds {MAX_IMAGE_SIDE} pixels on a side", self.width, self.height),
             ));
         }
-        if !(1..=2).contains(&self.layers) {
-            return Err(Error::setting("layers", format!("{} (must be 1 or 2)", self.layers)));
+        if self.layers > 2 {
+            return Err(Error::setting(
+                "layers",
+                format!("{} (must be 0 for automatic, 1 or 2)", self.layers),
+            ));
         }
         if !(self.dz >= 0.0 && self.dz.is_finite()) {
             return Err(Error::setting("dz", format!("{} (must be finite and >= 0)", self.dz)));

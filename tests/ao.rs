@@ -82,7 +82,8 @@ fn an_open_flat_plane_is_not_obscured() {
         [Vec3::new(-50.0, 0.0, -50.0), Vec3::new(-50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, 50.0)],
         [Vec3::new(-50.0, 0.0, -50.0), Vec3::new(50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, -50.0)],
     ];
-    let scene = soup(&plane, false);
+    let mut scene = soup(&plane, false);
+    scene.ambient = Vec3::splat(0.2);
     let camera =
         Camera::perspective(Vec3::new(0.0, 2.0, 4.0), Vec3::new(0.0, 0.0, -2.0), 60.0, 0.1);
     let av = compare_with_cpu(

@@ -46,7 +46,17 @@ fn render_writes_image_layers_and_timings() {
         json["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert_eq!(
         names,
-        ["raster.clear", "raster.layer0", "raster.layer1", "resolve", "pyramid", "ao", "ao.blur"]
+        [
+            "raster.clear",
+            "raster.layer0",
+            "raster.layer1",
+            "resolve",
+            "pyramid",
+            "ao",
+            "ao.blur",
+            "direct",
+            "composite"
+        ]
     );
     let total: f64 =
         json["passes"].as_array().unwrap().iter().map(|p| p["ms"].as_f64().unwrap()).sum();

@@ -15,7 +15,7 @@ fn pyramid_matches_cpu_reference_and_holds_real_depths() {
         let r = render(
             &scene,
             &scene.camera_or_default(),
-            Settings { precision, timings: false, ..Settings::with_size(w, h) },
+            Settings { precision, timings: false, layers: 2, ..Settings::with_size(w, h) },
         );
         let g = gpu();
         let layout = PyramidLayout::new(w, h);

@@ -15,7 +15,7 @@ use rand::{Rng, SeedableRng};
 /// Raster tests need no obscurance passes.
 fn settings(width: u32, height: u32) -> Settings {
     let ao = deep_gbuffer::AoSettings { enabled: false, ..Default::default() };
-    Settings { timings: false, ao, ..Settings::with_size(width, height) }
+    Settings { timings: false, ao, layers: 2, ..Settings::with_size(width, height) }
 }
 
 /// Pixels where the GPU word differs from the CPU's, with a description of the first few.
@@ -295,7 +295,7 @@ fn one_pass_variants_equal_two_pass_on_a_static_camera() {
             &[camera.clone(), camera.clone()],
             Settings { layer1, ..base.clone() },
         );
-        assert_eq!(r.renderer.passes(), ["raster.clear", "raster.layers", "resolve"]);
+        assert_eq!(r.renderer.passes()[..3], ["raster.clear", "raster.layers", "resolve"]);
         assert_eq!(r.vis0, exact.vis0, "{layer1:?} layer 0");
         let (n, report) = mismatches(&r.vis1, &exact.vis1, 96);
         assert_eq!(n, 0, "{layer1:?} layer 1 differs from TwoPass at {n} pixels:{report}");
@@ -307,7 +307,10 @@ fn first_frame_of_a_one_pass_variant_is_two_pass() {
     let (scene, camera) = cornell();
     let r =
         render(&scene, &camera, Settings { layer1: Layer1Variant::Reproject, ..settings(32, 24) });
-    assert_eq!(r.renderer.passes(), ["raster.clear", "raster.layer0", "raster.layer1", "resolve"]);
+    assert_eq!(
+        r.renderer.passes()[..4],
+        ["raster.clear", "raster.layer0", "raster.layer1", "resolve"]
+    );
 }
 
 #[test]
@@ -446,10 +449,11 @@ fn imported_buffers_are_checked_against_their_counts() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
     let uploaded = SceneBuffers::upload(&g.device, &scene).unwrap();
     let mut b = uploaded.buffers().clone();
-    SceneBuffers::import(b.clone()).expect("the uploaded buffers import as they are");
+    SceneBuffers::import(&g.device, b.clone(), Default::default())
+        .expect("the uploaded buffers import as they are");
     b.triangle_count += 1;
-    let e = SceneBuffers::import(b.clone()).unwrap_err().to_string();
+    let e = SceneBuffers::import(&g.device, b.clone(), Default::default()).unwrap_err().to_string();
     assert!(e.contains("indices") && e.contains("bytes"), "{e}");
     b.triangle_count = 0;
-    assert!(SceneBuffers::import(b).is_err());
+    assert!(SceneBuffers::import(&g.device, b, Default::default()).is_err());
 }

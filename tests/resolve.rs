@@ -23,7 +23,7 @@ fn compare(scene: &Scene, precision: Precision, width: u32, height: u32, color_t
     let r = render(
         scene,
         &scene.camera_or_default(),
-        Settings { precision, timings: false, ..Settings::with_size(width, height) },
+        Settings { precision, timings: false, layers: 2, ..Settings::with_size(width, height) },
     );
     let g = gpu();
     for (layer, vis) in [(0, &r.vis0), (1, &r.vis1)] {
@@ -106,7 +106,11 @@ fn textured_gltf_matches_cpu_reference() {
 fn cornell_light_is_emissive() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
     let camera = scene.camera_or_default();
-    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(64, 48) });
+    let r = render(
+        &scene,
+        &camera,
+        Settings { timings: false, layers: 2, ..Settings::with_size(64, 48) },
+    );
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     let light = scene.materials.iter().position(|m| m.name == "light").unwrap() as u32;

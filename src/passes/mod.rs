@@ -3,6 +3,8 @@
 pub mod ao;
 pub mod baseline;
 pub mod blur;
+pub mod composite;
+pub mod direct;
 pub mod fill;
 pub mod pyramid;
 pub mod raster;

@@ -49,6 +49,8 @@ pub fn cornell() -> Result<Scene> {
             reverse_z: false,
         },
     });
+    // Sky light entering through the open front, for the ambient term.
+    scene.ambient = Vec3::splat(0.08);
     scene.lights.push(Light {
         name: "ceiling".into(),
         kind: LightKind::Point { position: Vec3::new(0.0, 1.9, 0.0), range: None },

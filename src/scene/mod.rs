@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod gltf;
+pub mod lighting;
 pub mod obj;
 pub mod upload;
 
@@ -13,6 +14,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3, Vec4};
 
 pub use camera::{Camera, Projection};
+pub use lighting::{GpuLight, SceneInfo};
 
 use crate::{Error, Result};
 

@@ -15,7 +15,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::Scene;
+use super::{GpuLight, Scene, SceneInfo};
 use crate::gpu::storage_buffer_init;
 use crate::{Error, Result};
 
@@ -82,6 +82,9 @@ pub struct ImportedBuffers {
 #[derive(Clone, Debug)]
 pub struct SceneBuffers {
     pub(crate) b: ImportedBuffers,
+    pub(crate) info: SceneInfo,
+    /// [`GpuLight`] per light (one zeroed light when there is none, so it binds).
+    pub(crate) lights: wgpu::Buffer,
 }
 
 /// Triangles above this count cannot be addressed by the large-triangle bin (3 bits per entry
@@ -96,6 +99,7 @@ impl SceneBuffers {
 
     fn create(device: &wgpu::Device, scene: &Scene) -> Result<SceneBuffers> {
         scene.validate()?;
+        SceneInfo::of(scene).validate()?;
         let limits = device.limits();
         let mut texels: Vec<u32> = Vec::new();
         let mut materials = Vec::with_capacity(scene.materials.len());
@@ -189,13 +193,19 @@ impl SceneBuffers {
             triangle_count: count(scene.triangles.len(), "triangles")?,
             material_count: count(scene.materials.len(), "materials")?,
         };
-        Ok(SceneBuffers { b })
+        let info = SceneInfo::of(scene);
+        Ok(SceneBuffers { lights: light_buffer(device, &info), b, info })
     }
 
     /// Uses a host engine's buffers as they are (no copy), after checking their sizes and usage
     /// against the counts. Index and material-id values are not checked here: the kernels
     /// ignore triangles whose ids are out of range.
-    pub fn import(buffers: ImportedBuffers) -> Result<SceneBuffers> {
+    pub fn import(
+        device: &wgpu::Device,
+        buffers: ImportedBuffers,
+        info: SceneInfo,
+    ) -> Result<SceneBuffers> {
+        info.validate()?;
         let b = &buffers;
         if b.triangle_count == 0 {
             return Err(Error::InvalidScene("the scene has no triangles".into()));
@@ -225,7 +235,17 @@ impl SceneBuffers {
                 return Err(Error::ImportedBuffer { name, message: "lacks STORAGE usage".into() });
             }
         }
-        Ok(SceneBuffers { b: buffers })
+        Ok(SceneBuffers { lights: light_buffer(device, &info), b: buffers, info })
+    }
+
+    /// Lights, ambient and material facts.
+    pub fn info(&self) -> &SceneInfo {
+        &self.info
+    }
+
+    /// The lights as [`GpuLight`]s.
+    pub fn light_buffer(&self) -> &wgpu::Buffer {
+        &self.lights
     }
 
     /// The underlying buffers.
@@ -237,4 +257,9 @@ impl SceneBuffers {
     pub fn triangle_count(&self) -> u32 {
         self.b.triangle_count
     }
+}
+
+fn light_buffer(device: &wgpu::Device, info: &SceneInfo) -> wgpu::Buffer {
+    let lights: Vec<GpuLight> = info.lights.iter().map(GpuLight::new).collect();
+    storage_buffer_init(device, "deep-gbuffer.scene.lights", bytemuck::cast_slice(&lights))
 }

@@ -40,7 +40,7 @@ pub fn render_frames(scene: &Scene, cameras: &[Camera], settings: Settings) -> R
         renderer.render(&g.device, &g.queue, &buffers, camera).expect("render");
     }
     let vis0 = renderer.read_visibility(&g.device, &g.queue, 0).expect("read vis0");
-    let vis1 = if renderer.settings().layers == 2 {
+    let vis1 = if renderer.last_plan().is_some_and(|p| p.layers == 2) {
         renderer.read_visibility(&g.device, &g.queue, 1).expect("read vis1")
     } else {
         Vec::new()

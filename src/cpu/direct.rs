@@ -1,0 +1,90 @@
+//! CPU reference of `wgsl/direct.wgsl` and `wgsl/shared/light.wgsl`.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3, Vec4Swizzles};
+
+use crate::cpu::ao::view_position;
+use crate::gbuffer::GSample;
+use crate::gpu::FrameUniform;
+use crate::scene::GpuLight;
+
+/// As `light_at`: irradiance at `p` and the unit direction towards the light.
+pub fn light_at(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
+    let radiance = Vec3::from(light.radiance);
+    let direction = Vec3::from(light.direction);
+    if light.kind == 0 {
+        return (radiance, -direction);
+    }
+    let d = Vec3::from(light.position) - p;
+    let dist2 = d.dot(d).max(1e-8);
+    let l = d / dist2.sqrt();
+    let mut attenuation = 1.0 / dist2;
+    if light.range > 0.0 {
+        let ratio2 = dist2 / (light.range * light.range);
+        let window = (1.0 - ratio2 * ratio2).clamp(0.0, 1.0);
+        attenuation *= window * window;
+    }
+    if light.kind == 2 {
+        let cd = (-l).dot(direction);
+        let t = ((cd - light.cos_outer) / (light.cos_inner - light.cos_outer).max(1e-4))
+            .clamp(0.0, 1.0);
+        attenuation *= t * t;
+    }
+    (radiance * attenuation, l)
+}
+
+/// As `brdf`.
+pub fn brdf(n: Vec3, v: Vec3, l: Vec3, albedo: Vec3, roughness: f32, metallic: f32) -> Vec3 {
+    let h = (v + l).normalize();
+    let nl = n.dot(l).max(0.0);
+    let nv = n.dot(v).max(1e-4);
+    let nh = n.dot(h).max(0.0);
+    let vh = v.dot(h).max(0.0);
+    let a = (roughness * roughness).max(1e-3);
+    let a2 = a * a;
+    let q = nh * nh * (a2 - 1.0) + 1.0;
+    let distribution = a2 / (PI * q * q);
+    let k = a * 0.5;
+    let visibility = 1.0 / ((nl * (1.0 - k) + k) * (nv * (1.0 - k) + k) * 4.0);
+    let f0 = Vec3::splat(0.04).lerp(albedo, metallic);
+    let fresnel = f0 + (Vec3::ONE - f0) * (1.0 - vh).powf(5.0);
+    (1.0 - metallic) * albedo / PI + distribution * visibility * fresnel
+}
+
+fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
+    glam::Vec4::from_array(std::array::from_fn(|c| {
+        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
+    }))
+}
+
+/// Outgoing direct radiance of every pixel of `layer` (zero where there is no surface).
+pub fn direct(f: &FrameUniform, layer: &[GSample], lights: &[GpuLight]) -> Vec<Vec3> {
+    let mut out = vec![Vec3::ZERO; (f.width * f.height) as usize];
+    for y in 0..f.height {
+        for x in 0..f.width {
+            let p = (y * f.width + x) as usize;
+            let s = &layer[p];
+            if s.depth.is_nan() || s.depth <= 0.0 {
+                continue;
+            }
+            let vp = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+            let world = mat_mul(&f.inv_view, vp.extend(1.0).to_array()).xyz();
+            let v = if f.ortho != 0 {
+                Vec3::from_slice(&f.inv_view[2][..3]).normalize()
+            } else {
+                (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
+            };
+            let mut sum = Vec3::ZERO;
+            for light in lights {
+                let (e, l) = light_at(light, world);
+                let nl = s.normal.dot(l);
+                if nl > 0.0 {
+                    sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl;
+                }
+            }
+            out[p] = sum;
+        }
+    }
+    out
+}

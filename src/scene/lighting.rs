@@ -1,0 +1,138 @@
+//! What the lighting passes and the plan need to know of a scene besides its geometry: its
+//! lights, its ambient (sky) radiance and whether any material reflects.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::{Light, LightKind, Scene};
+use crate::{Error, Result};
+
+/// Lights, ambient and material facts of a scene, kept on the CPU beside its
+/// [`SceneBuffers`](crate::SceneBuffers). For imported buffers the host fills it in.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneInfo {
+    /// Punctual lights.
+    pub lights: Vec<Light>,
+    /// Ambient (sky) radiance, linear rgb.
+    pub ambient: Vec3,
+    /// Some material has a mirror reflectivity above zero.
+    pub reflective: bool,
+}
+
+impl SceneInfo {
+    /// The facts of `scene`.
+    pub fn of(scene: &Scene) -> SceneInfo {
+        SceneInfo {
+            lights: scene.lights.clone(),
+            ambient: scene.ambient,
+            reflective: scene.materials.iter().any(|m| m.reflectivity > 0.0),
+        }
+    }
+
+    /// Checks lights and ambient: finite, non-negative, unit directions, cone angles in order.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, m: &str| Err(Error::InvalidScene(format!("light `{name}`: {m}")));
+        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+            return Err(Error::InvalidScene(format!(
+                "ambient {} must be finite and >= 0",
+                self.ambient
+            )));
+        }
+        for l in &self.lights {
+            if !(l.color.is_finite()
+                && l.color.min_element() >= 0.0
+                && l.intensity.is_finite()
+                && l.intensity >= 0.0)
+            {
+                return bad(&l.name, "colour and intensity must be finite and >= 0");
+            }
+            let (position, direction, range) = match l.kind {
+                LightKind::Directional { direction } => (Vec3::ZERO, Some(direction), None),
+                LightKind::Point { position, range } => (position, None, range),
+                LightKind::Spot { position, direction, range, inner_cone, outer_cone } => {
+                    if !(0.0 <= inner_cone
+                        && inner_cone <= outer_cone
+                        && outer_cone <= std::f32::consts::FRAC_PI_2)
+                    {
+                        return bad(
+                            &l.name,
+                            "cone angles must satisfy 0 <= inner <= outer <= pi/2",
+                        );
+                    }
+                    (position, Some(direction), range)
+                }
+            };
+            if !position.is_finite() {
+                return bad(&l.name, "position is not finite");
+            }
+            if direction.is_some_and(|d| !(d.is_finite() && d.length_squared() > 0.0)) {
+                return bad(&l.name, "direction must be finite and non-zero");
+            }
+            if range.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
+                return bad(&l.name, "range must be finite and > 0");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Light kinds in [`GpuLight::kind`].
+pub const LIGHT_DIRECTIONAL: u32 = 0;
+/// A point light.
+pub const LIGHT_POINT: u32 = 1;
+/// A spot light.
+pub const LIGHT_SPOT: u32 = 2;
+
+/// A light as the kernels read it. Mirrors `struct Light` in `wgsl/shared/light.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct GpuLight {
+    /// Position (point, spot).
+    pub position: [f32; 3],
+    /// [`LIGHT_DIRECTIONAL`], [`LIGHT_POINT`] or [`LIGHT_SPOT`].
+    pub kind: u32,
+    /// Unit direction the light travels (directional, spot).
+    pub direction: [f32; 3],
+    /// Range (0: infinite).
+    pub range: f32,
+    /// Colour times intensity.
+    pub radiance: [f32; 3],
+    /// Cosine of the inner cone angle (spot).
+    pub cos_inner: f32,
+    /// Cosine of the outer cone angle (spot).
+    pub cos_outer: f32,
+    /// Padding.
+    pub _pad: [u32; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuLight>() == 64);
+
+impl GpuLight {
+    /// The GPU form of `light`.
+    pub fn new(light: &Light) -> GpuLight {
+        let radiance = (light.color * light.intensity).to_array();
+        let base = GpuLight { radiance, ..GpuLight::default() };
+        match light.kind {
+            LightKind::Directional { direction } => GpuLight {
+                kind: LIGHT_DIRECTIONAL,
+                direction: direction.normalize().to_array(),
+                ..base
+            },
+            LightKind::Point { position, range } => GpuLight {
+                kind: LIGHT_POINT,
+                position: position.to_array(),
+                range: range.unwrap_or(0.0),
+                ..base
+            },
+            LightKind::Spot { position, direction, range, inner_cone, outer_cone } => GpuLight {
+                kind: LIGHT_SPOT,
+                position: position.to_array(),
+                direction: direction.normalize().to_array(),
+                range: range.unwrap_or(0.0),
+                cos_inner: inner_cone.cos(),
+                cos_outer: outer_cone.cos(),
+                ..base
+            },
+        }
+    }
+}

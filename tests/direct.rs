@@ -1,0 +1,109 @@
+//! Direct light and the composite against their CPU references, and a lit plane against the
+//! closed-form value of the BRDF.
+
+mod common;
+
+use std::f32::consts::PI;
+
+use common::{gpu, render, soup};
+use deep_gbuffer::cpu::{composite as cpu_composite, direct as cpu_direct};
+use deep_gbuffer::scene::{GpuLight, Light, LightKind, Projection};
+use deep_gbuffer::{Camera, Scene, Settings};
+use glam::Vec3;
+
+/// GPU `pow`, `sqrt` and division differ from Rust's in the last bits, and the shader compiler
+/// may fuse multiply-adds: radiance agrees to a relative 1e-4 (plus an absolute floor for
+/// values near zero).
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() <= 1e-4 * b.abs().max_element() + 1e-6
+}
+
+#[test]
+fn cornell_direct_and_composite_match_cpu_reference() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let (w, h) = (64, 48);
+    let r = render(
+        &scene,
+        &scene.camera_or_default(),
+        Settings { timings: false, ..Settings::with_size(w, h) },
+    );
+    let g = gpu();
+    let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let expected = cpu_direct::direct(&r.frame, &layer0.samples, &lights);
+    let actual =
+        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    let mut lit = 0;
+    for (p, (a, b)) in actual.iter().zip(&expected).enumerate() {
+        assert!(close(*a, *b), "direct at pixel {p}: gpu {a} cpu {b}");
+        lit += usize::from(b.max_element() > 0.01);
+    }
+    assert!(lit > (w * h / 2) as usize, "the light reaches most of the box ({lit})");
+
+    // The composite from the GPU's own inputs.
+    let av = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
+    let expected = cpu_composite::composite(
+        &layer0.samples,
+        &actual,
+        Some(&av[..(w * h) as usize]),
+        scene.ambient,
+    );
+    let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer().unwrap()).unwrap();
+    for (p, (a, b)) in hdr.iter().zip(&expected).enumerate() {
+        assert!(close(*a, *b), "composite at pixel {p}: gpu {a} cpu {b}");
+        assert!(a.is_finite() && a.min_element() >= 0.0);
+    }
+}
+
+/// A white plane lit straight from above by a directional light, seen straight from above
+/// (orthographic): n = l = v, so the BRDF is albedo / pi + D F G / 4 with D = 1 / (pi a^2),
+/// G = 1, F = 0.04 (a = roughness^2).
+#[test]
+fn a_lit_plane_has_the_closed_form_radiance() {
+    let plane = [
+        [Vec3::new(-2.0, 0.0, -2.0), Vec3::new(-2.0, 0.0, 2.0), Vec3::new(2.0, 0.0, 2.0)],
+        [Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 0.0, 2.0), Vec3::new(2.0, 0.0, -2.0)],
+    ];
+    let mut scene = soup(&plane, false);
+    let (albedo, roughness) = (0.6f32, 0.7f32);
+    scene.materials[0].base_color = glam::Vec4::new(albedo, albedo, albedo, 1.0);
+    scene.materials[0].roughness = roughness;
+    scene.lights.push(Light {
+        name: "sun".into(),
+        kind: LightKind::Directional { direction: Vec3::NEG_Y },
+        color: Vec3::ONE,
+        intensity: 3.0,
+        casts_shadows: false,
+    });
+    let camera = Camera {
+        eye: Vec3::new(0.0, 5.0, 0.0),
+        target: Vec3::ZERO,
+        up: Vec3::NEG_Z,
+        projection: Projection::Orthographic { height: 2.0, near: 0.1, far: 10.0 },
+    };
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(16, 16) });
+    let g = gpu();
+    let direct =
+        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    let a = roughness * roughness;
+    let expected = 3.0 * (albedo / PI + 0.04 / (4.0 * PI * a * a));
+    for d in &direct {
+        assert!((d.x - expected).abs() <= 1e-4 * expected, "{d} vs {expected}");
+    }
+}
+
+#[test]
+fn a_scene_without_light_has_zero_direct_radiance() {
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    scene.lights.clear();
+    let r = render(
+        &scene,
+        &scene.camera_or_default(),
+        Settings { timings: false, ..Settings::with_size(32, 24) },
+    );
+    assert!(!r.renderer.passes().iter().any(|p| p == "direct"));
+    let g = gpu();
+    let direct =
+        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    assert!(direct.iter().all(|d| *d == Vec3::ZERO));
+}

@@ -1,0 +1,106 @@
+//! The plan runs only what a scene and the settings call for, and the renderer issues exactly
+//! the planned passes (a skipped pass has no GPU work and no timing).
+
+mod common;
+
+use common::{gpu, render_frames};
+use deep_gbuffer::plan::Reason;
+use deep_gbuffer::{AoSettings, Effects, Layer1Variant, Plan, Scene, SceneInfo, Settings};
+use glam::Vec3;
+
+fn cornell_info() -> SceneInfo {
+    SceneInfo::of(&Scene::from_spec("builtin:cornell").unwrap())
+}
+
+#[test]
+fn cornell_runs_everything_it_has() {
+    let plan = Plan::new(&cornell_info(), &Settings::default());
+    assert_eq!((plan.layers, plan.ao, plan.direct), (2, Reason::Runs, Reason::Runs));
+    assert_eq!(
+        plan.passes,
+        [
+            "raster.clear",
+            "raster.layer0",
+            "raster.layer1",
+            "resolve",
+            "pyramid",
+            "ao",
+            "ao.blur",
+            "direct",
+            "composite"
+        ]
+    );
+}
+
+#[test]
+fn no_ambient_means_no_obscurance_and_no_second_layer() {
+    let info = SceneInfo { ambient: Vec3::ZERO, ..cornell_info() };
+    let plan = Plan::new(&info, &Settings::default());
+    assert_eq!((plan.layers, plan.ao), (1, Reason::NotNeeded));
+    assert_eq!(plan.passes, ["raster.clear", "raster.layer0", "resolve", "direct", "composite"]);
+}
+
+#[test]
+fn no_light_means_no_direct_pass() {
+    let info = SceneInfo { lights: Vec::new(), ..cornell_info() };
+    let plan = Plan::new(&info, &Settings::default());
+    assert_eq!(plan.direct, Reason::NotNeeded);
+    assert!(!plan.passes.iter().any(|p| p == "direct"));
+}
+
+#[test]
+fn switched_off_effects_cost_nothing() {
+    let info = cornell_info();
+    let only_direct =
+        Settings { effects: Effects::parse("direct").unwrap(), ..Settings::default() };
+    let plan = Plan::new(&info, &only_direct);
+    assert_eq!((plan.layers, plan.ao), (1, Reason::Disabled));
+    let one_layer_ao = Settings {
+        ao: AoSettings { two_layers: false, ..Default::default() },
+        ..Settings::default()
+    };
+    let plan = Plan::new(&info, &one_layer_ao);
+    assert_eq!((plan.layers, plan.ao, plan.ao_two_layers), (1, Reason::Runs, false));
+    let no_blur =
+        Settings { ao: AoSettings { blur_radius: 0, ..Default::default() }, ..Settings::default() };
+    assert!(!Plan::new(&info, &no_blur).passes.iter().any(|p| p == "ao.blur"));
+    let forced =
+        Settings { layers: 2, effects: Effects::parse("direct").unwrap(), ..Settings::default() };
+    assert_eq!(Plan::new(&info, &forced).layers, 2, "a host can ask for layer 1 itself");
+    assert!(Effects::parse("ao,bogus").unwrap_err().to_string().contains("bogus"));
+    assert_eq!(Effects::parse("auto").unwrap(), Effects::default());
+}
+
+#[test]
+fn one_pass_variants_plan_raster_layers() {
+    let settings = Settings { layer1: Layer1Variant::Reproject, ..Settings::default() };
+    let plan = Plan::new(&cornell_info(), &settings);
+    assert_eq!(&plan.passes[..3], ["raster.clear", "raster.layers", "resolve"]);
+}
+
+/// The passes recorded, and the passes timed, are exactly the plan's.
+#[test]
+fn the_renderer_runs_and_times_exactly_the_plan() {
+    let g = gpu();
+    assert!(
+        g.device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+        "lavapipe has timestamp queries"
+    );
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    for (ambient, variant) in [
+        (Vec3::splat(0.1), Layer1Variant::TwoPass),
+        (Vec3::ZERO, Layer1Variant::TwoPass),
+        (Vec3::splat(0.1), Layer1Variant::Previous),
+    ] {
+        scene.ambient = ambient;
+        let camera = scene.camera_or_default();
+        let settings = Settings { layer1: variant, ..Settings::with_size(32, 24) };
+        let r = render_frames(&scene, &[camera.clone(), camera], settings);
+        let plan = r.renderer.last_plan().unwrap().clone();
+        assert_eq!(plan, r.renderer.plan(&r.buffers), "the plan is stable from frame to frame");
+        assert_eq!(r.renderer.passes(), &plan.passes[..]);
+        let timed: Vec<String> =
+            r.renderer.timings(&g.device).unwrap().into_iter().map(|t| t.name).collect();
+        assert_eq!(timed, plan.passes, "ambient {ambient} {variant:?}");
+    }
+}

@@ -1,0 +1,51 @@
+// Composite: DIRECT + AV * AMBIENT + emission into an HDR image (rgb, a = 1 on surfaces), where
+// AMBIENT is the sky radiance reflected by the diffuse albedo, (1 - metallic) * base colour *
+// ambient, and AV is 1 without obscurance (AO undefined). Pixels without a surface show the sky.
+// The radiosity and reflection terms join this sum with their kernels.
+// src/cpu/composite.rs is the same on the CPU.
+// defines: PACKED AO
+
+#include "shared/frame.wgsl"
+#include "shared/gbuffer.wgsl"
+
+// Mirrors `CompositeUniform` in src/passes/composite.rs.
+struct Composite {
+    ambient: vec3<f32>,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> composite: Composite;
+@group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
+@group(0) @binding(3) var<storage, read> direct: array<vec4<f32>>;
+#if AO
+@group(0) @binding(4) var<storage, read> av: array<f32>;
+#endif
+@group(0) @binding(5) var<storage, read_write> hdr: array<vec4<f32>>;
+
+fn sample_at(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u], gbuffer[p * G_WORDS + 2u], gbuffer[p * G_WORDS + 3u]);
+#endif
+}
+
+@compute @workgroup_size(8, 8)
+fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let s = sample_at(p);
+    if !(s.depth > 0.0) {
+        hdr[p] = vec4<f32>(composite.ambient, 0.0);
+        return;
+    }
+    var visibility = 1.0;
+#if AO
+    visibility = av[p];
+#endif
+    let ambient = (1.0 - s.metallic) * s.base_color * composite.ambient;
+    hdr[p] = vec4<f32>(direct[p].rgb + visibility * ambient + s.emissive, 1.0);
+}
