@@ -519,6 +519,34 @@ impl Renderer {
         Ok(())
     }
 
+    /// [`encode`](Renderer::encode), then copies the HDR composite (`vec4<f32>` per pixel, row
+    /// major) into the caller's `target` buffer (COPY_DST, at least `width * height * 16` bytes).
+    pub fn encode_to(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        target: &wgpu::Buffer,
+    ) -> Result<()> {
+        let bytes = u64::from(self.settings.width) * u64::from(self.settings.height) * 16;
+        if target.size() < bytes || !target.usage().contains(wgpu::BufferUsages::COPY_DST) {
+            return Err(Error::ImportedBuffer {
+                name: "target",
+                message: format!(
+                    "needs COPY_DST usage and {bytes} bytes (has {} bytes, {:?})",
+                    target.size(),
+                    target.usage()
+                ),
+            });
+        }
+        self.encode(device, queue, encoder, scene, camera)?;
+        let hdr = self.hdr_buffer().expect("encode creates it");
+        encoder.copy_buffer_to_buffer(hdr, 0, target, 0, bytes);
+        Ok(())
+    }
+
     /// Encodes and submits one frame on `queue`.
     pub fn render(
         &mut self,

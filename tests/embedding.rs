@@ -1,0 +1,131 @@
+//! deep-gbuffer as one stage of a host's frame: the host owns the device, its geometry buffers
+//! and its command encoder, and reads the composite back from its own buffer.
+
+use deep_gbuffer::scene::upload::MATERIAL_DOUBLE_SIDED;
+use deep_gbuffer::scene::{Light, LightKind};
+use deep_gbuffer::{
+    Camera, GpuMaterial, ImportedBuffers, Renderer, SceneBuffers, SceneInfo, Settings,
+};
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+/// The host's own device, opened with what deep-gbuffer publishes it needs.
+fn host_device() -> (wgpu::Device, wgpu::Queue) {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .expect("an adapter (lavapipe: apt-get install -y mesa-vulkan-drivers)");
+    let features =
+        Renderer::required_features() | (adapter.features() & Renderer::optional_features());
+    let limits = Renderer::required_limits().using_resolution(adapter.limits());
+    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("host"),
+        required_features: features,
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .expect("device")
+}
+
+fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::INDEX,
+    })
+}
+
+#[test]
+fn host_frame_with_deep_gbuffer_as_one_stage() {
+    let (device, queue) = host_device();
+
+    // The host's geometry: one quad facing +z, in its own buffers.
+    let positions: [f32; 12] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0];
+    let normals: [f32; 12] = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+    let uvs = [0.0f32; 8];
+    let indices: [u32; 6] = [0, 1, 2, 0, 2, 3];
+    let material = GpuMaterial {
+        base_color: [0.5, 0.5, 0.5, 1.0],
+        roughness: 1.0,
+        flags: MATERIAL_DOUBLE_SIDED,
+        ..Default::default()
+    };
+    let buffers = ImportedBuffers {
+        positions: storage(&device, "host.positions", bytemuck::cast_slice(&positions)),
+        normals: storage(&device, "host.normals", bytemuck::cast_slice(&normals)),
+        uvs: storage(&device, "host.uvs", bytemuck::cast_slice(&uvs)),
+        indices: storage(&device, "host.indices", bytemuck::cast_slice(&indices)),
+        triangle_materials: storage(
+            &device,
+            "host.materials_of_triangles",
+            bytemuck::cast_slice(&[0u32, 0]),
+        ),
+        materials: storage(&device, "host.materials", bytemuck::bytes_of(&material)),
+        texels: storage(&device, "host.texels", &[0u8; 16]),
+        vertex_count: 4,
+        triangle_count: 2,
+        material_count: 1,
+    };
+    let info = SceneInfo {
+        lights: vec![Light {
+            name: "key".into(),
+            kind: LightKind::Directional { direction: Vec3::NEG_Z },
+            color: Vec3::ONE,
+            intensity: 2.0,
+            casts_shadows: false,
+        }],
+        ambient: Vec3::new(0.1, 0.2, 0.3),
+        reflective: false,
+    };
+    let scene = SceneBuffers::import(&device, buffers, info).unwrap();
+    let (w, h) = (32u32, 32u32);
+    let mut renderer = Renderer::new(&device, &queue, Settings::with_size(w, h)).unwrap();
+    let camera = Camera::perspective(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 40.0, 0.1);
+
+    // The host's frame: its own work, then deep-gbuffer, then its own copy to read back.
+    let bytes = u64::from(w * h * 16);
+    let target = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("host.target"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("host.readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("host.frame") });
+    encoder.clear_buffer(&target, 0, None);
+    renderer.encode_to(&device, &queue, &mut encoder, &scene, &camera, &target).unwrap();
+    encoder.copy_buffer_to_buffer(&target, 0, &readback, 0, bytes);
+    queue.submit([encoder.finish()]);
+
+    let pixels = deep_gbuffer::gpu::map_read(&device, &readback).unwrap();
+    let pixels: &[[f32; 4]] = bytemuck::cast_slice(&pixels);
+    let center = pixels[(h / 2 * w + w / 2) as usize];
+    let corner = pixels[0];
+    // The quad, lit head-on: albedo / pi * E (+ a little specular) + ambient * albedo.
+    let expected = 0.5 / std::f32::consts::PI * 2.0 + 0.5 * 0.1;
+    assert!(
+        center[3] == 1.0 && (center[0] - expected).abs() < 0.02,
+        "quad pixel {center:?}, expected about {expected}"
+    );
+    // The corner sees the sky.
+    assert_eq!(corner, [0.1, 0.2, 0.3, 0.0]);
+
+    // A target too small is a typed error, not a GPU validation failure.
+    let small = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("host.small"),
+        size: 64,
+        usage: wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    assert!(renderer.encode_to(&device, &queue, &mut encoder, &scene, &camera, &small).is_err());
+}
