@@ -36,4 +36,4 @@ pub use plan::{Effects, Plan};
 pub use renderer::{Diagnostics, Renderer};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
-pub use settings::{AoSettings, AtomicPath, Layer1Variant, Precision, Settings};
+pub use settings::{AoSettings, AtomicPath, Layer1Variant, Precision, Settings, ShadowSettings};

@@ -17,11 +17,13 @@ pub struct Effects {
     pub ao: bool,
     /// Direct light (needs a light).
     pub direct: bool,
+    /// Shadow maps (need direct light and a light that casts shadows).
+    pub shadows: bool,
 }
 
 impl Default for Effects {
     fn default() -> Self {
-        Effects { ao: true, direct: true }
+        Effects { ao: true, direct: true, shadows: true }
     }
 }
 
@@ -31,15 +33,16 @@ impl Effects {
         if text.trim() == "auto" {
             return Ok(Effects::default());
         }
-        let mut e = Effects { ao: false, direct: false };
+        let mut e = Effects { ao: false, direct: false, shadows: false };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
                 "ao" => e.ao = true,
                 "direct" => e.direct = true,
+                "shadows" => e.shadows = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
-                        format!("unknown effect `{other}` (known: ao, direct; or auto)"),
+                        format!("unknown effect `{other}` (known: ao, direct, shadows; or auto)"),
                     ));
                 }
             }
@@ -70,6 +73,8 @@ pub struct Plan {
     pub ao_two_layers: bool,
     /// Direct light.
     pub direct: Reason,
+    /// Names of the lights that get shadow maps (pass `shadow.<name>` each).
+    pub shadows: Vec<String>,
     /// Pass names in order, as `--timings` names them (steady state: a one-pass layer-1
     /// variant rasterizes both layers in `raster.layers` once it has a previous frame).
     pub passes: Vec<String>,
@@ -108,11 +113,25 @@ impl Plan {
                 passes.push("ao.blur".into());
             }
         }
+        let shadows: Vec<String> =
+            if direct == Reason::Runs && settings.effects.shadows && settings.shadows.enabled {
+                info.lights.iter().filter(|l| l.casts_shadows).map(|l| l.name.clone()).collect()
+            } else {
+                Vec::new()
+            };
+        passes.extend(shadows.iter().map(|name| format!("shadow.{name}")));
         if direct == Reason::Runs {
             passes.push("direct".into());
         }
         passes.push("composite".into());
-        Plan { layers, ao, ao_two_layers: layers == 2 && settings.ao.two_layers, direct, passes }
+        Plan {
+            layers,
+            ao,
+            ao_two_layers: layers == 2 && settings.ao.two_layers,
+            direct,
+            shadows,
+            passes,
+        }
     }
 }
 
@@ -131,6 +150,11 @@ impl fmt::Display for Plan {
             if self.ao_two_layers { ", two layers" } else { "" }
         )?;
         writeln!(f, "direct:  {}", why(self.direct))?;
+        if self.shadows.is_empty() {
+            writeln!(f, "shadows: none")?;
+        } else {
+            writeln!(f, "shadows: {}", self.shadows.join(", "))?;
+        }
         write!(f, "passes:  {}", self.passes.join(", "))
     }
 }

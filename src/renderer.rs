@@ -7,11 +7,12 @@ use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
 use crate::passes::ao::{AoPass, AoUniform};
 use crate::passes::blur::BlurPass;
 use crate::passes::composite::CompositePass;
-use crate::passes::direct::DirectPass;
+use crate::passes::direct::{DirectPass, ShadowInputs};
 use crate::passes::fill::FillPass;
 use crate::passes::pyramid::PyramidPass;
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
 use crate::passes::resolve::ResolvePass;
+use crate::passes::shadow::{self, ShadowFace};
 use crate::plan::{Plan, Reason};
 use crate::scene::Camera;
 use crate::settings::{AtomicPath, Layer1Variant, Settings};
@@ -53,7 +54,96 @@ pub struct Renderer {
     last_frame: Option<FrameUniform>,
     ao: Option<AoStage>,
     shading: Option<ShadingStage>,
+    shadows: Option<ShadowStage>,
     plan: Option<Plan>,
+}
+
+/// Shadow maps of the shadow-casting lights: one visibility buffer per face (drawn by the
+/// rasterizer), copied into one atlas the direct kernel reads.
+struct ShadowStage {
+    /// The shadow lights' names, in the plan's order (the stage is rebuilt when they change).
+    key: Vec<String>,
+    /// Per shadow light: name, light index, first face, face count.
+    groups: Vec<(String, usize, usize, usize)>,
+    face_uniforms: Vec<wgpu::Buffer>,
+    face_vis: Vec<wgpu::Buffer>,
+    faces: wgpu::Buffer,
+    light_faces: wgpu::Buffer,
+    atlas: wgpu::Buffer,
+}
+
+impl ShadowStage {
+    fn new(device: &wgpu::Device, s: &Settings, scene: &SceneBuffers) -> Result<ShadowStage> {
+        let res = s.shadows.resolution;
+        let face_bytes = u64::from(res) * u64::from(res) * 8;
+        let info = scene.info();
+        let layout = shadow::light_faces(info, res, (0, 0, 0));
+        let groups: Vec<(String, usize, usize, usize)> = layout
+            .iter()
+            .map(|g| (info.lights[g.light].name.clone(), g.light, g.first, g.faces.len()))
+            .collect();
+        let total: usize = groups.iter().map(|g| g.3).sum();
+        let limit =
+            device.limits().max_storage_buffer_binding_size.min(device.limits().max_buffer_size);
+        if face_bytes * total as u64 > limit {
+            return Err(Error::ExceedsLimit {
+                what: format!("{total} shadow-map faces of {res}x{res}"),
+                needed: face_bytes * total as u64,
+                limit,
+            });
+        }
+        let uniform = || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("deep-gbuffer.shadow.frame"),
+                size: std::mem::size_of::<FrameUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let storage = |label: &str, size: u64| {
+            gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty())
+        };
+        Ok(ShadowStage {
+            key: groups.iter().map(|g| g.0.clone()).collect(),
+            groups,
+            face_uniforms: (0..total).map(|_| uniform()).collect(),
+            face_vis: (0..total).map(|_| storage("deep-gbuffer.shadow.face", face_bytes)).collect(),
+            faces: storage(
+                "deep-gbuffer.shadow.faces",
+                (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64,
+            ),
+            light_faces: storage(
+                "deep-gbuffer.shadow.lights",
+                (info.lights.len().max(2) * 8) as u64,
+            ),
+            atlas: storage("deep-gbuffer.shadow.atlas", face_bytes * total.max(1) as u64),
+        })
+    }
+
+    /// Writes every face's camera (lights or bounds may have changed).
+    fn update(&self, queue: &wgpu::Queue, scene: &SceneBuffers, res: u32) {
+        let info = scene.info();
+        let b = scene.buffers();
+        let mut faces = Vec::new();
+        let mut light_faces = vec![[0u32; 2]; info.lights.len().max(2)];
+        for group in
+            shadow::light_faces(info, res, (b.triangle_count, b.material_count, b.vertex_count))
+        {
+            light_faces[group.light] = [group.first as u32, group.faces.len() as u32];
+            for (k, (uniform, face)) in group.faces.into_iter().enumerate() {
+                queue.write_buffer(
+                    &self.face_uniforms[group.first + k],
+                    0,
+                    bytemuck::bytes_of(&uniform),
+                );
+                faces.push(face);
+            }
+        }
+        if !faces.is_empty() {
+            queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
+        }
+        queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces));
+    }
 }
 
 /// Direct light and the composite, and their images.
@@ -234,6 +324,7 @@ impl Renderer {
             last_frame: None,
             ao: None,
             shading: None,
+            shadows: None,
             plan: None,
             settings,
         })
@@ -274,6 +365,13 @@ impl Renderer {
     /// The plan of the last [`encode`](Renderer::encode).
     pub fn last_plan(&self) -> Option<&Plan> {
         self.plan.as_ref()
+    }
+
+    /// The shadow maps of the last frame, every face's visibility words back to back (in the
+    /// order of [`light_faces`](crate::passes::shadow::light_faces)), or `None` without shadows.
+    pub fn shadow_atlas_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.plan.as_ref().filter(|p| !p.shadows.is_empty())?;
+        self.shadows.as_ref().map(|s| &s.atlas)
     }
 
     /// The HDR image of the last frame: `vec4<f32>` per pixel, linear radiance (a = 1 on
@@ -329,6 +427,17 @@ impl Renderer {
     ) -> Result<()> {
         camera.validate()?;
         let plan = self.plan(scene);
+        if !plan.shadows.is_empty() {
+            let rebuild = self.shadows.as_ref().is_none_or(|st| st.key != plan.shadows);
+            if rebuild {
+                self.shadows = Some(ShadowStage::new(device, &self.settings, scene)?);
+            }
+            self.shadows.as_ref().expect("built above").update(
+                queue,
+                scene,
+                self.settings.shadows.resolution,
+            );
+        }
         let ao_two_layers = plan.ao_two_layers;
         if plan.ao == Reason::Runs && self.ao.as_ref().is_none_or(|a| a.two_layers != ao_two_layers)
         {
@@ -477,8 +586,46 @@ impl Renderer {
             }
         }
         let shading = self.shading.as_ref().expect("created above");
+        let shadow_stage = self.shadows.as_ref().filter(|_| !plan.shadows.is_empty());
+        if let Some(stage) = shadow_stage {
+            for (name, _, first, count) in &stage.groups {
+                {
+                    let mut pass = begin(encoder, &format!("shadow.{name}"));
+                    for face in *first..first + count {
+                        self.fill.encode(device, &mut pass, &stage.face_vis[face], u32::MAX);
+                        let t = RasterTargets {
+                            frame: &stage.face_uniforms[face],
+                            bins,
+                            large,
+                            args,
+                            vis0: Some(&stage.face_vis[face]),
+                            vis1: None,
+                            zref: None,
+                            counts: None,
+                        };
+                        self.raster.encode(device, &mut pass, scene, RasterMode::Layer0, &t);
+                    }
+                }
+                for face in *first..first + count {
+                    let bytes = stage.face_vis[face].size();
+                    encoder.copy_buffer_to_buffer(
+                        &stage.face_vis[face],
+                        0,
+                        &stage.atlas,
+                        face as u64 * bytes,
+                        bytes,
+                    );
+                }
+            }
+        }
         if plan.direct == Reason::Runs {
             let mut pass = begin(encoder, "direct");
+            let shadows = shadow_stage.map(|stage| ShadowInputs {
+                faces: &stage.faces,
+                light_faces: &stage.light_faces,
+                atlas: &stage.atlas,
+                pcf: s.shadows.pcf,
+            });
             shading.direct.encode(
                 device,
                 &mut pass,
@@ -486,6 +633,7 @@ impl Renderer {
                 scene,
                 &self.gbuffer[0],
                 &shading.radiance,
+                shadows,
                 size,
             );
         } else {

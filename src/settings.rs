@@ -110,6 +110,39 @@ impl AoSettings {
     }
 }
 
+/// Shadow maps (`src/passes/shadow.rs`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadowSettings {
+    /// Draw shadow maps for the lights that cast shadows.
+    pub enabled: bool,
+    /// Side of each shadow-map face in texels.
+    pub resolution: u32,
+    /// Percentage-closer filtering radius in texels: (2 pcf + 1)^2 taps; 0 gives hard shadows.
+    pub pcf: u32,
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        ShadowSettings { enabled: true, resolution: 512, pcf: 1 }
+    }
+}
+
+impl ShadowSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(16..=4096).contains(&self.resolution) {
+            return Err(Error::setting(
+                "shadows.resolution",
+                format!("{} (must be 16 to 4096)", self.resolution),
+            ));
+        }
+        if self.pcf > 4 {
+            return Err(Error::setting("shadows.pcf", format!("{} (at most 4)", self.pcf)));
+        }
+        Ok(())
+    }
+}
+
 /// Settings of a [`Renderer`](crate::Renderer).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -132,6 +165,8 @@ pub struct Settings {
     pub timings: bool,
     /// Ambient obscurance.
     pub ao: AoSettings,
+    /// Shadow maps.
+    pub shadows: ShadowSettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: crate::plan::Effects,
 }
@@ -148,6 +183,7 @@ impl Default for Settings {
             atomics: AtomicPath::Auto,
             timings: true,
             ao: AoSettings::default(),
+            shadows: ShadowSettings::default(),
             effects: crate::plan::Effects::default(),
         }
     }
@@ -184,6 +220,9 @@ impl Settings {
         }
         if self.ao.enabled {
             self.ao.validate()?;
+        }
+        if self.shadows.enabled {
+            self.shadows.validate()?;
         }
         Ok(())
     }

@@ -54,6 +54,7 @@ fn render_writes_image_layers_and_timings() {
             "pyramid",
             "ao",
             "ao.blur",
+            "shadow.ceiling",
             "direct",
             "composite"
         ]

@@ -6,7 +6,7 @@ mod common;
 use std::f32::consts::PI;
 
 use common::{gpu, render, soup};
-use deep_gbuffer::cpu::{composite as cpu_composite, direct as cpu_direct};
+use deep_gbuffer::cpu::{composite as cpu_composite, direct as cpu_direct, shadow as cpu_shadow};
 use deep_gbuffer::scene::{GpuLight, Light, LightKind, Projection};
 use deep_gbuffer::{Camera, Scene, Settings};
 use glam::Vec3;
@@ -30,7 +30,22 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
-    let expected = cpu_direct::direct(&r.frame, &layer0.samples, &lights);
+    // The CPU draws its own shadow maps, with the CPU rasterizer.
+    let (faces, light_faces, atlas) =
+        cpu_shadow::maps(&scene, Settings::default().shadows.resolution);
+    let shadows = cpu_shadow::Shadows {
+        faces: &faces,
+        light_faces: &light_faces,
+        atlas: &atlas,
+        pcf: Settings::default().shadows.pcf,
+    };
+    let gpu_atlas = r
+        .renderer
+        .read_f32(&g.device, &g.queue, r.renderer.shadow_atlas_buffer().unwrap())
+        .unwrap();
+    let gpu_atlas: Vec<u64> = bytemuck::pod_collect_to_vec(&gpu_atlas);
+    assert!(gpu_atlas == atlas, "the GPU's shadow maps equal the CPU rasterizer's");
+    let expected = cpu_direct::direct(&r.frame, &layer0.samples, &lights, Some(&shadows));
     let actual =
         r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
     let mut lit = 0;

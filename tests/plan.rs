@@ -26,6 +26,7 @@ fn cornell_runs_everything_it_has() {
             "pyramid",
             "ao",
             "ao.blur",
+            "shadow.ceiling",
             "direct",
             "composite"
         ]
@@ -37,7 +38,10 @@ fn no_ambient_means_no_obscurance_and_no_second_layer() {
     let info = SceneInfo { ambient: Vec3::ZERO, ..cornell_info() };
     let plan = Plan::new(&info, &Settings::default());
     assert_eq!((plan.layers, plan.ao), (1, Reason::NotNeeded));
-    assert_eq!(plan.passes, ["raster.clear", "raster.layer0", "resolve", "direct", "composite"]);
+    assert_eq!(
+        plan.passes,
+        ["raster.clear", "raster.layer0", "resolve", "shadow.ceiling", "direct", "composite"]
+    );
 }
 
 #[test]
@@ -45,7 +49,7 @@ fn no_light_means_no_direct_pass() {
     let info = SceneInfo { lights: Vec::new(), ..cornell_info() };
     let plan = Plan::new(&info, &Settings::default());
     assert_eq!(plan.direct, Reason::NotNeeded);
-    assert!(!plan.passes.iter().any(|p| p == "direct"));
+    assert!(!plan.passes.iter().any(|p| p == "direct" || p.starts_with("shadow.")));
 }
 
 #[test]
@@ -67,6 +71,10 @@ fn switched_off_effects_cost_nothing() {
     let forced =
         Settings { layers: 2, effects: Effects::parse("direct").unwrap(), ..Settings::default() };
     assert_eq!(Plan::new(&info, &forced).layers, 2, "a host can ask for layer 1 itself");
+    let no_shadows =
+        Settings { effects: Effects::parse("ao,direct").unwrap(), ..Settings::default() };
+    let plan = Plan::new(&info, &no_shadows);
+    assert!(plan.shadows.is_empty() && !plan.passes.iter().any(|p| p.starts_with("shadow.")));
     assert!(Effects::parse("ao,bogus").unwrap_err().to_string().contains("bogus"));
     assert_eq!(Effects::parse("auto").unwrap(), Effects::default());
 }

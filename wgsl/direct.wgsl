@@ -1,19 +1,22 @@
 // Direct light: deferred shading of the layer-0 G-buffer by every light in one pass
 // (O(pixels x lights)), written as outgoing radiance (rgb, a = 1 where there is a surface).
-// Shadows are not applied yet: every light is unoccluded.
+// With SHADOWS, a light with shadow faces is attenuated by percentage-closer filtering of its
+// shadow map ((2 pcf + 1)^2 taps): the point is pushed along its normal by a texel, and compared
+// with a constant plus slope-scaled bias (in texels of the map at that depth).
 // src/cpu/direct.rs is the same on the CPU.
-// defines: PACKED
+// defines: PACKED SHADOWS
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/light.wgsl"
+#include "shared/shadow.wgsl"
 
 // Mirrors `DirectUniform` in src/passes/direct.rs.
 struct Direct {
     light_count: u32,
+    pcf: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -21,6 +24,47 @@ struct Direct {
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
 @group(0) @binding(3) var<storage, read> lights: array<Light>;
 @group(0) @binding(4) var<storage, read_write> radiance: array<vec4<f32>>;
+#if SHADOWS
+@group(0) @binding(5) var<storage, read> faces: array<ShadowFace>;
+// Per light: (first face, face count); count 0 for a light without shadow.
+@group(0) @binding(6) var<storage, read> light_faces: array<vec2<u32>>;
+// All faces' visibility words (id, depth bits) back to back.
+@group(0) @binding(7) var<storage, read> atlas: array<vec2<u32>>;
+
+fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>) -> f32 {
+    let info = light_faces[i];
+    if info.y == 0u {
+        return 1.0;
+    }
+    let f = faces[info.x + shadow_face_index(info.y, world - light.position)];
+    let texel = shadow_texel_world(f, world);
+    let p = world + n * (texel * SHADOW_NORMAL_OFFSET_TEXELS);
+    let c = mat_mul(f.proj, mat_mul(f.view, vec4<f32>(p, 1.0)));
+    if !(c.w > 0.0) {
+        return 1.0;
+    }
+    let res = f32(f.resolution);
+    let uv = vec2<f32>((c.x / c.w * 0.5 + 0.5) * res, (0.5 - c.y / c.w * 0.5) * res);
+    let depth = -mat_mul(f.view, vec4<f32>(p, 1.0)).z;
+    let cos_theta = clamp(dot(n, l), 0.05, 1.0);
+    let tan_theta = sqrt(1.0 - cos_theta * cos_theta) / cos_theta;
+    let bias = texel * (SHADOW_BIAS_TEXELS + SHADOW_SLOPE_TEXELS * min(tan_theta, 10.0));
+    let center = vec2<i32>(floor(uv));
+    let k = i32(direct.pcf);
+    var lit = 0.0;
+    for (var dy = -k; dy <= k; dy++) {
+        for (var dx = -k; dx <= k; dx++) {
+            let t = clamp(center + vec2<i32>(dx, dy), vec2<i32>(0), vec2<i32>(i32(f.resolution) - 1));
+            let word = atlas[f.offset + u32(t.y) * f.resolution + u32(t.x)];
+            if word.y == 0xffffffffu || depth <= bitcast<f32>(word.y) + bias {
+                lit += 1.0;
+            }
+        }
+    }
+    let side = f32(2 * k + 1);
+    return lit / (side * side);
+}
+#endif
 
 fn sample_at(p: u32) -> GSample {
 #if PACKED
@@ -52,7 +96,11 @@ fn direct_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let e = light_at(lights[i], world, &l);
         let nl = dot(s.normal, l);
         if nl > 0.0 {
-            sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl;
+            var visible = 1.0;
+#if SHADOWS
+            visible = shadow(i, lights[i], world, s.normal, l);
+#endif
+            sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl * visible;
         }
     }
     radiance[p] = vec4<f32>(sum, 1.0);

@@ -5,6 +5,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::ao::view_position;
+use crate::cpu::shadow::{Shadows, shadow};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;
 use crate::scene::GpuLight;
@@ -52,14 +53,19 @@ pub fn brdf(n: Vec3, v: Vec3, l: Vec3, albedo: Vec3, roughness: f32, metallic: f
     (1.0 - metallic) * albedo / PI + distribution * visibility * fresnel
 }
 
-fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
+pub(crate) fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
     glam::Vec4::from_array(std::array::from_fn(|c| {
         ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
     }))
 }
 
 /// Outgoing direct radiance of every pixel of `layer` (zero where there is no surface).
-pub fn direct(f: &FrameUniform, layer: &[GSample], lights: &[GpuLight]) -> Vec<Vec3> {
+pub fn direct(
+    f: &FrameUniform,
+    layer: &[GSample],
+    lights: &[GpuLight],
+    shadows: Option<&Shadows>,
+) -> Vec<Vec3> {
     let mut out = vec![Vec3::ZERO; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
@@ -76,11 +82,16 @@ pub fn direct(f: &FrameUniform, layer: &[GSample], lights: &[GpuLight]) -> Vec<V
                 (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
             };
             let mut sum = Vec3::ZERO;
-            for light in lights {
+            for (i, light) in lights.iter().enumerate() {
                 let (e, l) = light_at(light, world);
                 let nl = s.normal.dot(l);
                 if nl > 0.0 {
-                    sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl;
+                    let visible =
+                        shadows.map_or(1.0, |sh| shadow(sh, i, light, world, s.normal, l));
+                    sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic)
+                        * e
+                        * nl
+                        * visible;
                 }
             }
             out[p] = sum;

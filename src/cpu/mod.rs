@@ -8,3 +8,4 @@ pub mod direct;
 pub mod pyramid;
 pub mod raster;
 pub mod resolve;
+pub mod shadow;

@@ -1,4 +1,4 @@
-//! `wgsl/direct.wgsl`: deferred direct lighting of layer 0.
+//! `wgsl/direct.wgsl`: deferred direct lighting of layer 0, with or without shadow maps.
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -12,19 +12,39 @@ use crate::settings::Precision;
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct DirectUniform {
     light_count: u32,
-    _pad: [u32; 3],
+    pcf: u32,
+    _pad: [u32; 2],
 }
 
-/// The direct-light kernel.
+/// The shadow inputs of the direct kernel.
+pub struct ShadowInputs<'a> {
+    /// `ShadowFace` per face.
+    pub faces: &'a wgpu::Buffer,
+    /// `(first face, face count)` per light.
+    pub light_faces: &'a wgpu::Buffer,
+    /// Every face's visibility words.
+    pub atlas: &'a wgpu::Buffer,
+    /// Percentage-closer filtering radius.
+    pub pcf: u32,
+}
+
+/// The direct-light kernel, without and with shadows.
 pub struct DirectPass {
-    pipeline: wgpu::ComputePipeline,
+    pipelines: [wgpu::ComputePipeline; 2],
 }
 
 impl DirectPass {
-    /// Builds the pipeline for `precision` G-buffers.
+    /// Builds the pipelines for `precision` G-buffers.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
-        DirectPass { pipeline: gpu::compute_pipeline(device, "direct", "direct_main", defines) }
+        let packed: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let mut shadows = packed.to_vec();
+        shadows.push("SHADOWS");
+        DirectPass {
+            pipelines: [
+                gpu::compute_pipeline(device, "direct", "direct_main", packed),
+                gpu::compute_pipeline(device, "direct", "direct_main", &shadows),
+            ],
+        }
     }
 
     /// Records the direct radiance of `gbuffer` into `radiance` (`vec4<f32>` per pixel).
@@ -37,18 +57,24 @@ impl DirectPass {
         scene: &SceneBuffers,
         gbuffer: &wgpu::Buffer,
         radiance: &wgpu::Buffer,
+        shadows: Option<ShadowInputs<'_>>,
         size: (u32, u32),
     ) {
         let light_count = scene.info().lights.len() as u32;
+        let pcf = shadows.as_ref().map_or(0, |s| s.pcf);
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("deep-gbuffer.direct"),
-            contents: bytemuck::bytes_of(&DirectUniform { light_count, _pad: [0; 3] }),
+            contents: bytemuck::bytes_of(&DirectUniform { light_count, pcf, _pad: [0; 2] }),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let entries =
-            [(0, frame), (1, &uniform), (2, gbuffer), (3, scene.light_buffer()), (4, radiance)];
-        let group = gpu::bind_group(device, "deep-gbuffer.direct", &self.pipeline, &entries);
-        pass.set_pipeline(&self.pipeline);
+        let pipeline = &self.pipelines[usize::from(shadows.is_some())];
+        let mut entries =
+            vec![(0, frame), (1, &uniform), (2, gbuffer), (3, scene.light_buffer()), (4, radiance)];
+        if let Some(s) = &shadows {
+            entries.extend([(5, s.faces), (6, s.light_faces), (7, s.atlas)]);
+        }
+        let group = gpu::bind_group(device, "deep-gbuffer.direct", pipeline, &entries);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
     }

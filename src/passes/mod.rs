@@ -9,3 +9,4 @@ pub mod fill;
 pub mod pyramid;
 pub mod raster;
 pub mod resolve;
+pub mod shadow;
