@@ -69,6 +69,15 @@ struct RenderArgs {
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
+    /// Frames to render (the outputs are the last frame's).
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Degrees the camera orbits about the target (around the up axis) over all frames.
+    #[arg(long, default_value_t = 0.0)]
+    orbit: f32,
+    /// Write every frame as DIR/frame_NNNN.png.
+    #[arg(long)]
+    out_seq: Option<PathBuf>,
     /// Print the plan: which passes the frame runs, and why the others do not.
     #[arg(long)]
     plan: bool,
@@ -224,7 +233,36 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     if args.plan {
         println!("{}", renderer.plan(&buffers));
     }
-    renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+    if args.frames == 0 || !args.orbit.is_finite() {
+        return Err(Error::InvalidSetting {
+            name: "frames",
+            message: "at least one frame, and a finite orbit".into(),
+        });
+    }
+    if let Some(dir) = &args.out_seq {
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.clone(), source: e })?;
+    }
+    let start = camera.clone();
+    for i in 0..args.frames {
+        let angle = (args.orbit * i as f32 / args.frames as f32).to_radians();
+        camera.eye = start.target
+            + glam::Quat::from_axis_angle(start.up.normalize(), angle) * (start.eye - start.target);
+        renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+        if let Some(dir) = &args.out_seq {
+            let hdr = renderer.read_rgb(
+                &gpu.device,
+                &gpu.queue,
+                renderer.hdr_buffer().expect("rendered"),
+            )?;
+            let path = dir.join(format!("frame_{i:04}.png"));
+            output::write_png_linear(
+                &path,
+                settings.width,
+                settings.height,
+                &output::tonemap(&hdr, args.exposure),
+            )?;
+        }
+    }
     let layer_count = renderer.last_plan().map_or(1, |p| p.layers as usize);
     let layers = (0..layer_count)
         .map(|l| renderer.read_gbuffer(&gpu.device, &gpu.queue, l))
