@@ -28,8 +28,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene: its deep G-buffer layers and a preview image.
-    Render(RenderArgs),
+    /// Render a scene: its deep G-buffer layers and the composite image.
+    Render(Box<RenderArgs>),
     /// Print the adapter, backend, driver, features and the active raster path.
     Info,
 }
@@ -328,7 +328,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(&cli.adapter, args),
+        Command::Render(args) => render(&cli.adapter, *args),
         Command::Info => info(&cli.adapter),
     };
     match result {
