@@ -18,11 +18,9 @@
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/spiral.wgsl"
 
 const LOG_MAX_OFFSET: i32 = 3;
-// The golden angle in turns (1 - 1 / phi).
-const GOLDEN_TURNS: f32 = 0.381966011;
-const TAU: f32 = 6.28318531;
 
 // Mirrors `AoUniform` in src/passes/ao.rs.
 struct Ao {
@@ -78,17 +76,6 @@ fn normal_at(p: u32) -> vec3<f32> {
 #endif
 }
 
-// Per-pixel rotation of the spiral: an integer hash (exact on every device), 12 bits of turns.
-fn pixel_hash(pixel: vec2<u32>) -> u32 {
-    var h = (pixel.x * 0x8da6b343u) ^ (pixel.y * 0xd8163841u);
-    h ^= h >> 16u;
-    h *= 0x7feb352du;
-    h ^= h >> 15u;
-    h *= 0x846ca68bu;
-    h ^= h >> 16u;
-    return h;
-}
-
 fn obscurance(c: vec3<f32>, n: vec3<f32>, y: vec3<f32>) -> f32 {
     let v = y - c;
     let vv = dot(v, v);
@@ -104,19 +91,11 @@ fn visibility(pixel: vec2<u32>) -> f32 {
     }
     let c = view_position(frame, vec2<f32>(pixel) + 0.5, z);
     let n = normalize(mat_mul(frame.view, vec4<f32>(normal_at(p), 0.0)).xyz);
-    // Pixels per scene unit at this depth.
-    var scale = frame.proj[1].y * f32(frame.height) * 0.5;
-    if frame.ortho == 0u {
-        scale /= z;
-    }
-    let r_px = ao.radius * scale;
-    let rotation = f32(pixel_hash(pixel) >> 20u) / 4096.0;
+    let r_px = ao.radius * pixels_per_unit(frame, z);
     var sum = 0.0;
     for (var i = 0u; i < ao.samples; i++) {
-        let alpha = (f32(i) + 0.5) / f32(ao.samples);
-        let angle = fract(f32(i) * GOLDEN_TURNS + rotation) * TAU;
-        let h = r_px * alpha;
-        let tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + h * vec2<f32>(cos(angle), sin(angle))));
+        let h = spiral_distance(i, ao.samples, r_px);
+        let tap = spiral_tap(pixel, i, ao.samples, r_px);
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }

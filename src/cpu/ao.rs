@@ -1,16 +1,14 @@
 //! CPU reference of `wgsl/ao.wgsl`: two-layer ambient obscurance.
 
-use std::f32::consts::TAU;
-
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
+use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;
 use crate::passes::pyramid::PyramidLayout;
 use crate::settings::AoSettings;
 
 const LOG_MAX_OFFSET: i32 = 3;
-const GOLDEN_TURNS: f32 = 0.381_966_01;
 
 fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
     glam::Vec4::from_array(std::array::from_fn(|c| {
@@ -44,16 +42,6 @@ fn texel_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u3
     p
 }
 
-fn pixel_hash(x: u32, y: u32) -> u32 {
-    let mut h = x.wrapping_mul(0x8da6_b343) ^ y.wrapping_mul(0xd816_3841);
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x7feb_352d);
-    h ^= h >> 15;
-    h = h.wrapping_mul(0x846c_a68b);
-    h ^= h >> 16;
-    h
-}
-
 fn obscurance(s: &AoSettings, c: Vec3, n: Vec3, y: Vec3) -> f32 {
     let v = y - c;
     let vv = v.dot(v);
@@ -80,21 +68,11 @@ pub fn ao(
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, z);
             let n = mat_mul(&f.view, layer0[p].normal.extend(0.0).to_array()).xyz().normalize();
-            let mut scale = f.proj[1][1] * f.height as f32 * 0.5;
-            if f.ortho == 0 {
-                scale /= z;
-            }
-            let r_px = s.radius * scale;
-            let rotation = (pixel_hash(x, y) >> 20) as f32 / 4096.0;
+            let r_px = s.radius * pixels_per_unit(f, z);
             let mut sum = 0.0;
             for i in 0..s.samples {
-                let alpha = (i as f32 + 0.5) / s.samples as f32;
-                let angle = (i as f32 * GOLDEN_TURNS + rotation).fract() * TAU;
-                let h = r_px * alpha;
-                let tap =
-                    (Vec2::new(x as f32, y as f32) + 0.5 + h * Vec2::new(angle.cos(), angle.sin()))
-                        .floor();
-                let (tx, ty) = (tap.x as i32, tap.y as i32);
+                let h = spiral_distance(i, s.samples, r_px);
+                let (tx, ty) = spiral_tap(x, y, i, s.samples, r_px);
                 if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
                     continue;
                 }

@@ -9,3 +9,4 @@ pub mod pyramid;
 pub mod raster;
 pub mod resolve;
 pub mod shadow;
+pub mod spiral;

@@ -1,0 +1,37 @@
+// The tap pattern shared by the screen-space gathers (ambient obscurance, radiosity): N taps on
+// a golden-angle spiral (a low-discrepancy set of directions for any N), tap i at distance
+// r_px (i + 0.5) / N, the whole spiral rotated per pixel by an integer hash (exact on every
+// device). src/cpu/ao.rs has the same functions.
+
+// The golden angle in turns (1 - 1 / phi).
+const GOLDEN_TURNS: f32 = 0.381966011;
+const TAU: f32 = 6.28318531;
+
+fn pixel_hash(pixel: vec2<u32>) -> u32 {
+    var h = (pixel.x * 0x8da6b343u) ^ (pixel.y * 0xd8163841u);
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    h ^= h >> 16u;
+    return h;
+}
+
+// Pixels per scene unit at view depth z.
+fn pixels_per_unit(f: Frame, z: f32) -> f32 {
+    let scale = f.proj[1].y * f32(f.height) * 0.5;
+    return select(scale / z, scale, f.ortho != 0u);
+}
+
+// Distance in pixels of tap i of n.
+fn spiral_distance(i: u32, n: u32, r_px: f32) -> f32 {
+    return r_px * (f32(i) + 0.5) / f32(n);
+}
+
+// The pixel of tap i of n around `pixel` for a spiral of radius r_px.
+fn spiral_tap(pixel: vec2<u32>, i: u32, n: u32, r_px: f32) -> vec2<i32> {
+    let rotation = f32(pixel_hash(pixel) >> 20u) / 4096.0;
+    let angle = fract(f32(i) * GOLDEN_TURNS + rotation) * TAU;
+    let h = spiral_distance(i, n, r_px);
+    return vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + h * vec2<f32>(cos(angle), sin(angle))));
+}
