@@ -36,4 +36,6 @@ pub use plan::{Effects, Plan};
 pub use renderer::{Diagnostics, Renderer};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
-pub use settings::{AoSettings, AtomicPath, Layer1Variant, Precision, Settings, ShadowSettings};
+pub use settings::{
+    AoSettings, AtomicPath, Layer1Variant, Precision, RadiositySettings, Settings, ShadowSettings,
+};

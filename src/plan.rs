@@ -19,11 +19,13 @@ pub struct Effects {
     pub direct: bool,
     /// Shadow maps (need direct light and a light that casts shadows).
     pub shadows: bool,
+    /// Screen-space radiosity (needs a light or an emissive material).
+    pub radiosity: bool,
 }
 
 impl Default for Effects {
     fn default() -> Self {
-        Effects { ao: true, direct: true, shadows: true }
+        Effects { ao: true, direct: true, shadows: true, radiosity: true }
     }
 }
 
@@ -33,16 +35,19 @@ impl Effects {
         if text.trim() == "auto" {
             return Ok(Effects::default());
         }
-        let mut e = Effects { ao: false, direct: false, shadows: false };
+        let mut e = Effects { ao: false, direct: false, shadows: false, radiosity: false };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
                 "ao" => e.ao = true,
                 "direct" => e.direct = true,
                 "shadows" => e.shadows = true,
+                "radiosity" => e.radiosity = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
-                        format!("unknown effect `{other}` (known: ao, direct, shadows; or auto)"),
+                        format!(
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity; or auto)"
+                        ),
                     ));
                 }
             }
@@ -73,6 +78,8 @@ pub struct Plan {
     pub ao_two_layers: bool,
     /// Direct light.
     pub direct: Reason,
+    /// Screen-space radiosity.
+    pub radiosity: Reason,
     /// Names of the lights that get shadow maps (pass `shadow.<name>` each).
     pub shadows: Vec<String>,
     /// Pass names in order, as `--timings` names them (steady state: a one-pass layer-1
@@ -91,7 +98,12 @@ impl Plan {
         let ao =
             reason(settings.ao.enabled && settings.effects.ao, info.ambient.max_element() > 0.0);
         let direct = reason(settings.effects.direct, !info.lights.is_empty());
-        let wants_layer1 = ao == Reason::Runs && settings.ao.two_layers;
+        let radiosity = reason(
+            settings.radiosity.enabled && settings.effects.radiosity,
+            !info.lights.is_empty() || info.emissive,
+        );
+        let wants_layer1 =
+            (ao == Reason::Runs && settings.ao.two_layers) || radiosity == Reason::Runs;
         let layers = match settings.layers {
             1 => 1,
             2 => 2,
@@ -123,12 +135,19 @@ impl Plan {
         if direct == Reason::Runs {
             passes.push("direct".into());
         }
+        if radiosity == Reason::Runs {
+            passes.extend(["radiosity", "radiosity.temporal"].map(String::from));
+            if settings.radiosity.blur_radius > 0 {
+                passes.push("radiosity.blur".into());
+            }
+        }
         passes.push("composite".into());
         Plan {
             layers,
             ao,
             ao_two_layers: layers == 2 && settings.ao.two_layers,
             direct,
+            radiosity,
             shadows,
             passes,
         }
@@ -150,6 +169,7 @@ impl fmt::Display for Plan {
             if self.ao_two_layers { ", two layers" } else { "" }
         )?;
         writeln!(f, "direct:  {}", why(self.direct))?;
+        writeln!(f, "radiosity: {}", why(self.radiosity))?;
         if self.shadows.is_empty() {
             writeln!(f, "shadows: none")?;
         } else {

@@ -10,6 +10,7 @@ use crate::passes::composite::CompositePass;
 use crate::passes::direct::{DirectPass, ShadowInputs};
 use crate::passes::fill::FillPass;
 use crate::passes::pyramid::PyramidPass;
+use crate::passes::radiosity::{RadiosityPass, RadiosityTargets, RadiosityUniform};
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
 use crate::passes::resolve::ResolvePass;
 use crate::passes::shadow::{self, ShadowFace};
@@ -55,7 +56,71 @@ pub struct Renderer {
     ao: Option<AoStage>,
     shading: Option<ShadingStage>,
     shadows: Option<ShadowStage>,
+    radiosity: Option<RadiosityStage>,
     plan: Option<Plan>,
+}
+
+/// Radiosity: the kernels, the outgoing radiance of both layers, the gathered irradiance, the
+/// filtered irradiance of the last and this frame, and last frame's layer 1.
+struct RadiosityStage {
+    pass: RadiosityPass,
+    uniform: wgpu::Buffer,
+    b: [wgpu::Buffer; 2],
+    raw: wgpu::Buffer,
+    history: [wgpu::Buffer; 2],
+    /// Which `history` holds the last frame's filtered irradiance.
+    last: usize,
+    /// Frames since the history began.
+    turn: u32,
+    prev_vis1: wgpu::Buffer,
+    blur: BlurPass,
+    /// The blur's intermediate and result.
+    blurred: [wgpu::Buffer; 2],
+}
+
+impl RadiosityStage {
+    /// The last encoded frame's irradiance as the composite read it, after `last` flipped.
+    fn output_after_frame(&self, blur_radius: u32) -> &wgpu::Buffer {
+        if blur_radius > 0 { &self.blurred[1] } else { &self.history[self.last] }
+    }
+
+    /// This frame's irradiance as the composite reads it (blurred unless the radius is 0).
+    fn output(&self, blur_radius: u32) -> &wgpu::Buffer {
+        if blur_radius > 0 { &self.blurred[1] } else { &self.history[1 - self.last] }
+    }
+
+    fn new(device: &wgpu::Device, s: &Settings) -> RadiosityStage {
+        let pixels = u64::from(s.width) * u64::from(s.height);
+        let buffer = |label: &str, bytes: u64| {
+            gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty())
+        };
+        RadiosityStage {
+            pass: RadiosityPass::new(device, s.precision),
+            uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("deep-gbuffer.radiosity"),
+                size: std::mem::size_of::<RadiosityUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            b: [
+                buffer("deep-gbuffer.radiosity.b0", pixels * 16),
+                buffer("deep-gbuffer.radiosity.b1", pixels * 16),
+            ],
+            raw: buffer("deep-gbuffer.radiosity.raw", pixels * 16),
+            history: [
+                buffer("deep-gbuffer.radiosity.history.a", pixels * 16),
+                buffer("deep-gbuffer.radiosity.history.b", pixels * 16),
+            ],
+            last: 0,
+            turn: 0,
+            prev_vis1: buffer("deep-gbuffer.radiosity.prev_vis1", pixels * 8),
+            blur: BlurPass::new(device, s.precision, s.radiosity.blur_radius, true),
+            blurred: [
+                buffer("deep-gbuffer.radiosity.blur", pixels * 16),
+                buffer("deep-gbuffer.radiosity.blurred", pixels * 16),
+            ],
+        }
+    }
 }
 
 /// Shadow maps of the shadow-casting lights: one visibility buffer per face (drawn by the
@@ -149,9 +214,10 @@ impl ShadowStage {
 /// Direct light and the composite, and their images.
 struct ShadingStage {
     direct: DirectPass,
-    composite: [CompositePass; 2],
-    /// Direct radiance and the HDR composite, `vec4<f32>` per pixel.
+    composite: CompositePass,
+    /// Direct radiance (layers 0 and 1) and the HDR composite, `vec4<f32>` per pixel.
     radiance: wgpu::Buffer,
+    radiance1: wgpu::Buffer,
     hdr: wgpu::Buffer,
 }
 
@@ -162,7 +228,8 @@ impl ShadingStage {
             |label: &str| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
         ShadingStage {
             direct: DirectPass::new(device, s.precision),
-            composite: [false, true].map(|ao| CompositePass::new(device, s.precision, ao)),
+            composite: CompositePass::new(device, s.precision),
+            radiance1: buffer("deep-gbuffer.direct.radiance1"),
             radiance: buffer("deep-gbuffer.direct.radiance"),
             hdr: buffer("deep-gbuffer.composite.hdr"),
         }
@@ -201,7 +268,7 @@ impl AoStage {
                 contents: bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
-            blur: BlurPass::new(device, s.precision, s.ao.blur_radius),
+            blur: BlurPass::new(device, s.precision, s.ao.blur_radius, false),
             av: [
                 buffer("deep-gbuffer.ao.raw", pixels),
                 buffer("deep-gbuffer.ao.blur", pixels),
@@ -325,6 +392,7 @@ impl Renderer {
             ao: None,
             shading: None,
             shadows: None,
+            radiosity: None,
             plan: None,
             settings,
         })
@@ -372,6 +440,22 @@ impl Renderer {
     pub fn shadow_atlas_buffer(&self) -> Option<&wgpu::Buffer> {
         self.plan.as_ref().filter(|p| !p.shadows.is_empty())?;
         self.shadows.as_ref().map(|s| &s.atlas)
+    }
+
+    /// Radiosity buffers of the last frame: [outgoing radiance B of layer 0, of layer 1, the
+    /// gathered irradiance and confidence, the temporally filtered irradiance, the blurred
+    /// irradiance the composite read], all `vec4<f32>` per pixel; `None` when radiosity is off.
+    pub fn radiosity_buffers(&self) -> Option<[&wgpu::Buffer; 5]> {
+        self.plan.as_ref().filter(|p| p.radiosity == Reason::Runs)?;
+        let r = self.radiosity.as_ref()?;
+        // `last` has flipped at the end of the frame: this frame's history is `history[last]`.
+        Some([
+            &r.b[0],
+            &r.b[1],
+            &r.raw,
+            &r.history[r.last],
+            r.output_after_frame(self.settings.radiosity.blur_radius),
+        ])
     }
 
     /// The HDR image of the last frame: `vec4<f32>` per pixel, linear radiance (a = 1 on
@@ -445,6 +529,16 @@ impl Renderer {
         }
         if self.shading.is_none() {
             self.shading = Some(ShadingStage::new(device, &self.settings));
+        }
+        let radiosity_history = self.history.is_some() && self.radiosity.is_some();
+        if plan.radiosity == Reason::Runs {
+            let stage =
+                self.radiosity.get_or_insert_with(|| RadiosityStage::new(device, &self.settings));
+            let jitter = self.settings.radiosity.jitter;
+            stage.turn = if radiosity_history && jitter { stage.turn.wrapping_add(1) } else { 0 };
+            let uniform =
+                RadiosityUniform::new(&self.settings.radiosity, radiosity_history, stage.turn);
+            queue.write_buffer(&stage.uniform, 0, bytemuck::bytes_of(&uniform));
         }
         let layers = plan.layers as usize;
         let s = &self.settings;
@@ -620,29 +714,71 @@ impl Renderer {
         }
         if plan.direct == Reason::Runs {
             let mut pass = begin(encoder, "direct");
-            let shadows = shadow_stage.map(|stage| ShadowInputs {
-                faces: &stage.faces,
-                light_faces: &stage.light_faces,
-                atlas: &stage.atlas,
-                pcf: s.shadows.pcf,
-            });
-            shading.direct.encode(
-                device,
-                &mut pass,
-                &self.frame,
-                scene,
-                &self.gbuffer[0],
-                &shading.radiance,
-                shadows,
-                size,
-            );
+            let layer1 = plan.radiosity == Reason::Runs;
+            let targets =
+                [(&self.gbuffer[0], &shading.radiance), (&self.gbuffer[1], &shading.radiance1)];
+            for (gbuffer, radiance) in targets.into_iter().take(1 + usize::from(layer1)) {
+                let shadows = shadow_stage.map(|stage| ShadowInputs {
+                    faces: &stage.faces,
+                    light_faces: &stage.light_faces,
+                    atlas: &stage.atlas,
+                    pcf: s.shadows.pcf,
+                });
+                shading.direct.encode(
+                    device,
+                    &mut pass,
+                    &self.frame,
+                    scene,
+                    gbuffer,
+                    radiance,
+                    shadows,
+                    size,
+                );
+            }
         } else {
             encoder.clear_buffer(&shading.radiance, 0, None);
+            encoder.clear_buffer(&shading.radiance1, 0, None);
+        }
+        let radiosity_stage = self.radiosity.as_ref().filter(|_| plan.radiosity == Reason::Runs);
+        if let Some(r) = radiosity_stage {
+            let targets = RadiosityTargets {
+                frame: &self.frame,
+                uniform: &r.uniform,
+                gbuffer: [&self.gbuffer[0], &self.gbuffer[1]],
+                direct: [&shading.radiance, &shading.radiance1],
+                b: [&r.b[0], &r.b[1]],
+                raw: &r.raw,
+                history: [&r.history[r.last], &r.history[1 - r.last]],
+                prev_vis: [prev_vis0, &r.prev_vis1],
+            };
+            {
+                let mut pass = begin(encoder, "radiosity");
+                r.pass.encode_gather(device, &mut pass, &targets, size);
+            }
+            {
+                let mut pass = begin(encoder, "radiosity.temporal");
+                r.pass.encode_temporal(device, &mut pass, &targets, size);
+            }
+            if s.radiosity.blur_radius > 0 {
+                let mut pass = begin(encoder, "radiosity.blur");
+                let filtered = &r.history[1 - r.last];
+                r.blur.encode(
+                    device,
+                    &mut pass,
+                    &self.frame,
+                    &self.gbuffer[0],
+                    filtered,
+                    &r.blurred[0],
+                    &r.blurred[1],
+                    size,
+                );
+            }
         }
         {
             let mut pass = begin(encoder, "composite");
             let av = ao_stage.map(|ao| if s.ao.blur_radius > 0 { &ao.av[2] } else { &ao.av[0] });
-            let composite = &shading.composite[usize::from(av.is_some())];
+            let radiosity = radiosity_stage.map(|r| r.output(s.radiosity.blur_radius));
+            let composite = &shading.composite;
             let ambient = scene.info().ambient;
             composite.encode(
                 device,
@@ -652,12 +788,17 @@ impl Renderer {
                 &self.gbuffer[0],
                 &shading.radiance,
                 av,
+                radiosity,
                 &shading.hdr,
                 size,
             );
         }
         if let Some(t) = &self.timestamps {
             t.resolve(encoder);
+        }
+        if let Some(r) = self.radiosity.as_mut().filter(|_| plan.radiosity == Reason::Runs) {
+            encoder.copy_buffer_to_buffer(&self.vis1, 0, &r.prev_vis1, 0, self.vis1.size());
+            r.last = 1 - r.last;
         }
         debug_assert_eq!(passes, plan.passes, "the recorded passes are the plan's");
         self.plan = Some(plan);

@@ -110,6 +110,90 @@ impl AoSettings {
     }
 }
 
+/// Screen-space radiosity (`wgsl/radiosity.wgsl`, documented there).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RadiositySettings {
+    /// Run the radiosity passes.
+    pub enabled: bool,
+    /// World-space gather radius, in scene units.
+    pub radius: f32,
+    /// Taps per pixel.
+    pub samples: u32,
+    /// Damping delta in (0, 1] of the indirect light fed back for the next bounce.
+    pub damping: f32,
+    /// Weight alpha in [0, 1) of the history in the temporal filter.
+    pub alpha: f32,
+    /// History is kept where the reprojected point lies within this distance (scene units,
+    /// along the previous view axis) of either previous layer.
+    pub history_tolerance: f32,
+    /// Count a tap only if its surface faces the gathering point (w.n_Y < 0).
+    pub normal_test: bool,
+    /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
+    pub blur_radius: u32,
+    /// Turn the tap spiral every frame, so the temporal filter averages different taps (less
+    /// noise, a little flicker); off, a static camera converges to a fixed point.
+    pub jitter: bool,
+}
+
+impl Default for RadiositySettings {
+    fn default() -> Self {
+        RadiositySettings {
+            enabled: true,
+            radius: 1.0,
+            samples: 13,
+            damping: 0.8,
+            alpha: 0.85,
+            history_tolerance: 0.01,
+            normal_test: true,
+            blur_radius: 3,
+            jitter: true,
+        }
+    }
+}
+
+impl RadiositySettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err(Error::setting(
+                "radiosity.radius",
+                format!("{} (must be finite and > 0)", self.radius),
+            ));
+        }
+        if self.samples == 0 || self.samples > 256 {
+            return Err(Error::setting(
+                "radiosity.samples",
+                format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if !(self.damping > 0.0 && self.damping <= 1.0) {
+            return Err(Error::setting(
+                "radiosity.damping",
+                format!("{} (must be in (0, 1])", self.damping),
+            ));
+        }
+        if !(self.alpha >= 0.0 && self.alpha < 1.0) {
+            return Err(Error::setting(
+                "radiosity.alpha",
+                format!("{} (must be in [0, 1))", self.alpha),
+            ));
+        }
+        if self.blur_radius > 32 {
+            return Err(Error::setting(
+                "radiosity.blur_radius",
+                format!("{} (at most 32)", self.blur_radius),
+            ));
+        }
+        if !(self.history_tolerance.is_finite() && self.history_tolerance >= 0.0) {
+            return Err(Error::setting(
+                "radiosity.history_tolerance",
+                format!("{} (must be finite and >= 0)", self.history_tolerance),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Shadow maps (`src/passes/shadow.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadowSettings {
@@ -167,6 +251,8 @@ pub struct Settings {
     pub ao: AoSettings,
     /// Shadow maps.
     pub shadows: ShadowSettings,
+    /// Screen-space radiosity.
+    pub radiosity: RadiositySettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: crate::plan::Effects,
 }
@@ -184,6 +270,7 @@ impl Default for Settings {
             timings: true,
             ao: AoSettings::default(),
             shadows: ShadowSettings::default(),
+            radiosity: RadiositySettings::default(),
             effects: crate::plan::Effects::default(),
         }
     }
@@ -223,6 +310,9 @@ impl Settings {
         }
         if self.shadows.enabled {
             self.shadows.validate()?;
+        }
+        if self.radiosity.enabled {
+            self.radiosity.validate()?;
         }
         Ok(())
     }

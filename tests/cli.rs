@@ -56,6 +56,9 @@ fn render_writes_image_layers_and_timings() {
             "ao.blur",
             "shadow.ceiling",
             "direct",
+            "radiosity",
+            "radiosity.temporal",
+            "radiosity.blur",
             "composite"
         ]
     );

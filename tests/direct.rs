@@ -57,10 +57,20 @@ fn cornell_direct_and_composite_match_cpu_reference() {
 
     // The composite from the GPU's own inputs.
     let av = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
+    let irradiance = r
+        .renderer
+        .read_f32(&g.device, &g.queue, r.renderer.radiosity_buffers().unwrap()[4])
+        .unwrap();
+    let irradiance: Vec<glam::Vec4> = irradiance
+        .chunks_exact(4)
+        .take((w * h) as usize)
+        .map(|c| glam::Vec4::new(c[0], c[1], c[2], c[3]))
+        .collect();
     let expected = cpu_composite::composite(
         &layer0.samples,
         &actual,
         Some(&av[..(w * h) as usize]),
+        Some(&irradiance),
         scene.ambient,
     );
     let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer().unwrap()).unwrap();

@@ -77,6 +77,7 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
         }],
         ambient: Vec3::new(0.1, 0.2, 0.3),
         reflective: false,
+        emissive: false,
         bounds: Some((Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
     };
     let scene = SceneBuffers::import(&device, buffers, info).unwrap();

@@ -8,6 +8,25 @@ use deep_gbuffer::plan::Reason;
 use deep_gbuffer::{AoSettings, Effects, Layer1Variant, Plan, Scene, SceneInfo, Settings};
 use glam::Vec3;
 
+fn no_radiosity() -> deep_gbuffer::RadiositySettings {
+    deep_gbuffer::RadiositySettings { enabled: false, ..Default::default() }
+}
+
+#[test]
+fn radiosity_reads_layer_1_and_needs_light() {
+    let plan =
+        Plan::new(&SceneInfo { ambient: Vec3::ZERO, ..cornell_info() }, &Settings::default());
+    assert_eq!((plan.layers, plan.radiosity), (2, Reason::Runs));
+    let dark = SceneInfo { lights: Vec::new(), emissive: false, ..cornell_info() };
+    assert_eq!(Plan::new(&dark, &Settings::default()).radiosity, Reason::NotNeeded);
+    let glowing = SceneInfo { lights: Vec::new(), ..cornell_info() };
+    assert_eq!(
+        Plan::new(&glowing, &Settings::default()).radiosity,
+        Reason::Runs,
+        "emission alone lights the scene"
+    );
+}
+
 fn cornell_info() -> SceneInfo {
     SceneInfo::of(&Scene::from_spec("builtin:cornell").unwrap())
 }
@@ -28,6 +47,9 @@ fn cornell_runs_everything_it_has() {
             "ao.blur",
             "shadow.ceiling",
             "direct",
+            "radiosity",
+            "radiosity.temporal",
+            "radiosity.blur",
             "composite"
         ]
     );
@@ -36,7 +58,8 @@ fn cornell_runs_everything_it_has() {
 #[test]
 fn no_ambient_means_no_obscurance_and_no_second_layer() {
     let info = SceneInfo { ambient: Vec3::ZERO, ..cornell_info() };
-    let plan = Plan::new(&info, &Settings::default());
+    // Radiosity reads layer 1 too: with it off, nothing does.
+    let plan = Plan::new(&info, &Settings { radiosity: no_radiosity(), ..Settings::default() });
     assert_eq!((plan.layers, plan.ao), (1, Reason::NotNeeded));
     assert_eq!(
         plan.passes,
@@ -61,6 +84,7 @@ fn switched_off_effects_cost_nothing() {
     assert_eq!((plan.layers, plan.ao), (1, Reason::Disabled));
     let one_layer_ao = Settings {
         ao: AoSettings { two_layers: false, ..Default::default() },
+        radiosity: no_radiosity(),
         ..Settings::default()
     };
     let plan = Plan::new(&info, &one_layer_ao);

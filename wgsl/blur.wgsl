@@ -1,9 +1,9 @@
-// Separable depth- and normal-aware (bilateral) blur of a scalar image, one direction per
-// dispatch (VERTICAL or not). A tap's weight is a Gaussian of its distance, times
+// Separable depth- and normal-aware (bilateral) blur of a scalar image (or, with VEC4, of a
+// vec4 image), one direction per dispatch (VERTICAL or not). A tap's weight is a Gaussian of its distance, times
 // max(0, 1 - |z' - z| / (DEPTH_TOLERANCE z)) so nothing bleeds across depth edges, times
 // max(0, n.n')^8 so nothing bleeds across creases; pixels without a surface are skipped.
 // src/cpu/blur.rs is the same on the CPU.
-// defines: PACKED VERTICAL
+// defines: PACKED VERTICAL VEC4
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -21,8 +21,14 @@ struct Blur {
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> blur: Blur;
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
-@group(0) @binding(3) var<storage, read> source: array<f32>;
-@group(0) @binding(4) var<storage, read_write> blurred: array<f32>;
+#if VEC4
+alias Value = vec4<f32>;
+#else
+alias Value = f32;
+#endif
+
+@group(0) @binding(3) var<storage, read> source: array<Value>;
+@group(0) @binding(4) var<storage, read_write> blurred: array<Value>;
 
 fn sample_at(p: u32) -> GSample {
 #if PACKED
@@ -50,7 +56,7 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #endif
     let r = i32(blur.radius);
     let sigma = max(f32(r), 1.0) * 0.5;
-    var sum = 0.0;
+    var sum = Value(0.0);
     var weights = 0.0;
     for (var k = -r; k <= r; k++) {
         let tap = vec2<i32>(gid.xy) + step * k;

@@ -1,9 +1,11 @@
-// Composite: DIRECT + AV * AMBIENT + emission into an HDR image (rgb, a = 1 on surfaces), where
-// AMBIENT is the sky radiance reflected by the diffuse albedo, (1 - metallic) * base colour *
-// ambient, and AV is 1 without obscurance (AO undefined). Pixels without a surface show the sky.
-// The radiosity and reflection terms join this sum with their kernels.
+// Composite: DIRECT + AV * AMBIENT + RADIOSITY + emission into an HDR image (rgb, a = 1 on
+// surfaces). The diffuse albedo (1 - metallic) * base colour / pi reflects the irradiance
+//     conf * E + (1 - conf) * AV * pi * ambient,
+// where E is the radiosity irradiance and conf its confidence M / N (both 0 without RADIOSITY,
+// which leaves AV * ambient * albedo), and AV is 1 without obscurance (AO undefined). Pixels
+// without a surface show the sky. The reflection term joins this sum with its kernel.
 // src/cpu/composite.rs is the same on the CPU.
-// defines: PACKED AO
+// defines: PACKED AO RADIOSITY
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -22,6 +24,9 @@ struct Composite {
 @group(0) @binding(4) var<storage, read> av: array<f32>;
 #endif
 @group(0) @binding(5) var<storage, read_write> hdr: array<vec4<f32>>;
+#if RADIOSITY
+@group(0) @binding(6) var<storage, read> radiosity: array<vec4<f32>>;
+#endif
 
 fn sample_at(p: u32) -> GSample {
 #if PACKED
@@ -46,6 +51,13 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #if AO
     visibility = av[p];
 #endif
-    let ambient = (1.0 - s.metallic) * s.base_color * composite.ambient;
-    hdr[p] = vec4<f32>(direct[p].rgb + visibility * ambient + s.emissive, 1.0);
+    var e = vec3<f32>(0.0);
+    var confidence = 0.0;
+#if RADIOSITY
+    e = radiosity[p].rgb;
+    confidence = clamp(radiosity[p].a, 0.0, 1.0);
+#endif
+    let albedo = (1.0 - s.metallic) * s.base_color;
+    let reflected = albedo * (confidence / 3.14159265 * e + (1.0 - confidence) * visibility * composite.ambient);
+    hdr[p] = vec4<f32>(direct[p].rgb + reflected + s.emissive, 1.0);
 }

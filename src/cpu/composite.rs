@@ -4,11 +4,13 @@ use glam::Vec3;
 
 use crate::gbuffer::GSample;
 
-/// DIRECT + AV * AMBIENT + emission per pixel; the sky where there is no surface.
+/// DIRECT + AV * AMBIENT + RADIOSITY + emission per pixel; the sky where there is no surface.
+/// `radiosity` is the irradiance (rgb) and confidence (w) per pixel.
 pub fn composite(
     layer: &[GSample],
     direct: &[Vec3],
     av: Option<&[f32]>,
+    radiosity: Option<&[glam::Vec4]>,
     ambient: Vec3,
 ) -> Vec<Vec3> {
     layer
@@ -19,7 +21,13 @@ pub fn composite(
                 return ambient;
             }
             let visibility = av.map_or(1.0, |a| a[p]);
-            direct[p] + visibility * ((1.0 - s.metallic) * s.base_color * ambient) + s.emissive
+            let (e, confidence) =
+                radiosity.map_or((Vec3::ZERO, 0.0), |r| (r[p].truncate(), r[p].w.clamp(0.0, 1.0)));
+            let albedo = (1.0 - s.metallic) * s.base_color;
+            let reflected = albedo
+                * (confidence / std::f32::consts::PI * e
+                    + (1.0 - confidence) * visibility * ambient);
+            direct[p] + reflected + s.emissive
         })
         .collect()
 }

@@ -32,7 +32,12 @@ pub fn spiral_distance(i: u32, n: u32, r_px: f32) -> f32 {
 
 /// As `spiral_tap`.
 pub fn spiral_tap(x: u32, y: u32, i: u32, n: u32, r_px: f32) -> (i32, i32) {
-    let rotation = (pixel_hash(x, y) >> 20) as f32 / 4096.0;
+    spiral_tap_turned(x, y, i, n, r_px, 0)
+}
+
+/// As `spiral_tap_turned`.
+pub fn spiral_tap_turned(x: u32, y: u32, i: u32, n: u32, r_px: f32, turn: u32) -> (i32, i32) {
+    let rotation = (((pixel_hash(x, y) >> 20) + (turn % 4096) * 1565) % 4096) as f32 / 4096.0;
     let angle = (i as f32 * GOLDEN_TURNS + rotation).fract() * TAU;
     let h = spiral_distance(i, n, r_px);
     let tap =

@@ -21,9 +21,15 @@ pub struct BlurPass {
 }
 
 impl BlurPass {
-    /// Builds the pipelines for `precision` G-buffers and a blur `radius` in pixels.
-    pub fn new(device: &wgpu::Device, precision: Precision, radius: u32) -> Self {
-        let packed: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+    /// Builds the pipelines for `precision` G-buffers and a blur `radius` in pixels, for f32
+    /// images or (`vec4`) `vec4<f32>` images.
+    pub fn new(device: &wgpu::Device, precision: Precision, radius: u32, vec4: bool) -> Self {
+        let mut packed: Vec<&str> =
+            if precision == Precision::Packed { vec!["PACKED"] } else { vec![] };
+        if vec4 {
+            packed.push("VEC4");
+        }
+        let packed = &packed[..];
         let mut vertical = packed.to_vec();
         vertical.push("VERTICAL");
         BlurPass {

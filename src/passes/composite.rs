@@ -14,26 +14,29 @@ struct CompositeUniform {
     _pad: u32,
 }
 
-/// The composite kernel, with or without an AV input.
+/// The composite kernel, with and without AV and radiosity inputs.
 pub struct CompositePass {
-    pipeline: wgpu::ComputePipeline,
-    ao: bool,
+    /// Indexed by `ao as usize + 2 * radiosity as usize`.
+    pipelines: [wgpu::ComputePipeline; 4],
 }
 
 impl CompositePass {
-    /// Builds the pipeline; `ao` reads an AV buffer.
-    pub fn new(device: &wgpu::Device, precision: Precision, ao: bool) -> Self {
-        let mut defines = Vec::new();
-        if precision == Precision::Packed {
-            defines.push("PACKED");
-        }
-        if ao {
-            defines.push("AO");
-        }
-        CompositePass {
-            pipeline: gpu::compute_pipeline(device, "composite", "composite_main", &defines),
-            ao,
-        }
+    /// Builds the pipelines.
+    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
+        let pipelines = [0usize, 1, 2, 3].map(|variant| {
+            let mut defines = Vec::new();
+            if precision == Precision::Packed {
+                defines.push("PACKED");
+            }
+            if variant & 1 != 0 {
+                defines.push("AO");
+            }
+            if variant & 2 != 0 {
+                defines.push("RADIOSITY");
+            }
+            gpu::compute_pipeline(device, "composite", "composite_main", &defines)
+        });
+        CompositePass { pipelines }
     }
 
     /// Records the composite into `hdr` (`vec4<f32>` per pixel).
@@ -47,6 +50,7 @@ impl CompositePass {
         gbuffer: &wgpu::Buffer,
         direct: &wgpu::Buffer,
         av: Option<&wgpu::Buffer>,
+        radiosity: Option<&wgpu::Buffer>,
         hdr: &wgpu::Buffer,
         size: (u32, u32),
     ) {
@@ -59,11 +63,16 @@ impl CompositePass {
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let mut entries = vec![(0, frame), (1, &uniform), (2, gbuffer), (3, direct), (5, hdr)];
-        if self.ao {
-            entries.push((4, av.expect("an AV buffer for the AO variant")));
+        if let Some(av) = av {
+            entries.push((4, av));
         }
-        let group = gpu::bind_group(device, "deep-gbuffer.composite", &self.pipeline, &entries);
-        pass.set_pipeline(&self.pipeline);
+        if let Some(radiosity) = radiosity {
+            entries.push((6, radiosity));
+        }
+        let pipeline =
+            &self.pipelines[usize::from(av.is_some()) + 2 * usize::from(radiosity.is_some())];
+        let group = gpu::bind_group(device, "deep-gbuffer.composite", pipeline, &entries);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
     }

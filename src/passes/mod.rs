@@ -7,6 +7,7 @@ pub mod composite;
 pub mod direct;
 pub mod fill;
 pub mod pyramid;
+pub mod radiosity;
 pub mod raster;
 pub mod resolve;
 pub mod shadow;

@@ -17,6 +17,8 @@ pub struct SceneInfo {
     pub ambient: Vec3,
     /// Some material has a mirror reflectivity above zero.
     pub reflective: bool,
+    /// Some material emits light.
+    pub emissive: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -29,6 +31,7 @@ impl SceneInfo {
             lights: scene.lights.clone(),
             ambient: scene.ambient,
             reflective: scene.materials.iter().any(|m| m.reflectivity > 0.0),
+            emissive: scene.materials.iter().any(|m| m.emissive.max_element() > 0.0),
             bounds: scene.bounds(),
         }
     }

@@ -30,7 +30,13 @@ fn spiral_distance(i: u32, n: u32, r_px: f32) -> f32 {
 
 // The pixel of tap i of n around `pixel` for a spiral of radius r_px.
 fn spiral_tap(pixel: vec2<u32>, i: u32, n: u32, r_px: f32) -> vec2<i32> {
-    let rotation = f32(pixel_hash(pixel) >> 20u) / 4096.0;
+    return spiral_tap_turned(pixel, i, n, r_px, 0u);
+}
+
+// The same spiral turned by `turn` golden-angle steps (a temporal filter that turns it every
+// frame averages different taps).
+fn spiral_tap_turned(pixel: vec2<u32>, i: u32, n: u32, r_px: f32, turn: u32) -> vec2<i32> {
+    let rotation = f32(((pixel_hash(pixel) >> 20u) + (turn % 4096u) * 1565u) % 4096u) / 4096.0;
     let angle = fract(f32(i) * GOLDEN_TURNS + rotation) * TAU;
     let h = spiral_distance(i, n, r_px);
     return vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + h * vec2<f32>(cos(angle), sin(angle))));

@@ -1,0 +1,77 @@
+//! CPU reference of `wgsl/radiosity.wgsl` for a frame without history: the feedback (B = direct
+//! + emission on both layers) and the gather.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
+
+use crate::cpu::ao::view_position;
+use crate::cpu::direct::mat_mul;
+use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
+use crate::gbuffer::GSample;
+use crate::gpu::FrameUniform;
+use crate::passes::radiosity::RadiosityUniform;
+
+/// B of one layer without history: direct radiance plus emission where there is a surface.
+pub fn feedback_without_history(layer: &[GSample], direct: &[Vec3]) -> Vec<Vec3> {
+    layer
+        .iter()
+        .zip(direct)
+        .map(|(s, d)| if s.depth > 0.0 { *d + s.emissive } else { Vec3::ZERO })
+        .collect()
+}
+
+/// The gathered irradiance (rgb) and confidence (w) of every layer-0 pixel.
+pub fn gather(
+    f: &FrameUniform,
+    u: &RadiosityUniform,
+    layers: [&[GSample]; 2],
+    b: [&[Vec3]; 2],
+) -> Vec<Vec4> {
+    let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
+    for y in 0..f.height {
+        for x in 0..f.width {
+            let p = (y * f.width + x) as usize;
+            let s = &layers[0][p];
+            if s.depth.is_nan() || s.depth <= 0.0 || u.samples == 0 {
+                continue;
+            }
+            let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+            let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
+            let r_px = u.radius * pixels_per_unit(f, s.depth);
+            let mut sum = Vec3::ZERO;
+            let mut m = 0u32;
+            for i in 0..u.samples {
+                let (tx, ty) = spiral_tap_turned(x, y, i, u.samples, r_px, u.turn);
+                if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
+                    continue;
+                }
+                let q = (ty as u32 * f.width + tx as u32) as usize;
+                let at = Vec2::new(tx as f32, ty as f32) + 0.5;
+                for layer in 0..2 {
+                    let yl = &layers[layer][q];
+                    if yl.depth.is_nan() || yl.depth <= 0.0 {
+                        continue;
+                    }
+                    let v = view_position(f, at, yl.depth) - c;
+                    let len = v.length();
+                    if len.is_nan() || len <= 1e-6 {
+                        continue;
+                    }
+                    let w = v / len;
+                    let wn_x = w.dot(n);
+                    let wn_y =
+                        w.dot(mat_mul(&f.view, yl.normal.extend(0.0).to_array()).xyz().normalize());
+                    if wn_x > 0.0 && (u.normal_test == 0 || wn_y < 0.0) {
+                        sum += b[layer][q] * wn_x;
+                        m += 1;
+                        break;
+                    }
+                }
+            }
+            let e = if m > 0 { 2.0 * PI / m as f32 * sum } else { Vec3::ZERO };
+            out[p] = e.extend(m as f32 / u.samples as f32);
+        }
+    }
+    out
+}

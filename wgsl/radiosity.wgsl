@@ -1,0 +1,192 @@
+// Screen-space radiosity from both layers, with temporal multi-bounce.
+//
+// radiosity_feedback: B, the outgoing radiance the gather reads: direct + emission + damped
+//   indirect, B = D + Le + delta (1 - metallic) albedo / pi * E_prev, with E_prev the previous
+//   frame's filtered irradiance at this point (reprojected; 0 where there is none). Layer 1 has
+//   no irradiance of its own: B1 = D1 + Le1.
+// radiosity_gather: E(X) = 2 pi / M * sum B(Y) max(w.n_X, 0) over the N spiral taps
+//   (wgsl/shared/spiral.wgsl, turned every frame) of a world-space radius, Y from layer 0, or from layer 1 where the
+//   layer-0 point fails; a tap counts only with w.n_X > 0 and, unless the test is off,
+//   w.n_Y < 0 (Y faces X). M is the number of taps that count; the confidence M / N is kept in
+//   alpha.
+// radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha where the reprojected point lies within
+//   `tolerance` (view depth, scene units) of either layer of the previous frame; otherwise E.
+//   Non-finite values never enter the history.
+// src/cpu/radiosity.rs is the same on the CPU.
+// defines: PACKED
+
+#include "shared/frame.wgsl"
+#include "shared/gbuffer.wgsl"
+#include "shared/spiral.wgsl"
+#include "shared/vis.wgsl"
+
+// Mirrors `RadiosityUniform` in src/passes/radiosity.rs.
+struct Radiosity {
+    radius: f32,
+    samples: u32,
+    damping: f32,
+    alpha: f32,
+    tolerance: f32,
+    normal_test: u32,
+    // 1 when the previous frame's history may be used.
+    history: u32,
+    // Frames since the history began: turns the spiral every frame.
+    turn: u32,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> params: Radiosity;
+@group(0) @binding(2) var<storage, read> gbuffer0: array<GWord>;
+@group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
+@group(0) @binding(4) var<storage, read> direct0: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> direct1: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> b0: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> b1: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> raw: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> history_out: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read> prev_vis0: array<u32>;
+@group(0) @binding(12) var<storage, read> prev_vis1: array<u32>;
+
+fn sample0(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u], gbuffer0[p * G_WORDS + 2u], gbuffer0[p * G_WORDS + 3u]);
+#endif
+}
+
+fn sample1(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u], gbuffer1[p * G_WORDS + 2u], gbuffer1[p * G_WORDS + 3u]);
+#endif
+}
+
+fn finite3(v: vec3<f32>) -> bool {
+    return all(abs(v) <= vec3<f32>(3.0e38));
+}
+
+// The previous frame's filtered irradiance at the layer-0 point of `pixel` (rgb) and whether it
+// is valid (a = 1).
+fn history_at(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
+    if params.history == 0u || !(s.depth > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let prev = vec2<f32>(pixel) + 0.5 - s.motion;
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
+        return vec4<f32>(0.0);
+    }
+    let q = u32(prev.y) * frame.width + u32(prev.x);
+    let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
+    let d = -mat_mul(frame.prev_view, world).z;
+    let z0 = prev_vis0[2u * q + 1u];
+    let z1 = prev_vis1[2u * q + 1u];
+    let near0 = z0 != VIS_EMPTY && abs(d - bitcast<f32>(z0)) <= params.tolerance;
+    let near1 = z1 != VIS_EMPTY && abs(d - bitcast<f32>(z1)) <= params.tolerance;
+    let h = history_in[q];
+    if !(near0 || near1) || !finite3(h.rgb) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(h.rgb, 1.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let s0 = sample0(p);
+    var out0 = vec3<f32>(0.0);
+    if s0.depth > 0.0 {
+        let e = history_at(gid.xy, s0).rgb;
+        out0 = direct0[p].rgb + s0.emissive + params.damping * (1.0 - s0.metallic) * s0.base_color / PI_R * e;
+    }
+    let s1 = sample1(p);
+    var out1 = vec3<f32>(0.0);
+    if s1.depth > 0.0 {
+        out1 = direct1[p].rgb + s1.emissive;
+    }
+    b0[p] = select(vec4<f32>(0.0), vec4<f32>(out0, 1.0), finite3(out0));
+    b1[p] = select(vec4<f32>(0.0), vec4<f32>(out1, 1.0), finite3(out1));
+}
+
+const PI_R: f32 = 3.14159265;
+
+@compute @workgroup_size(8, 8)
+fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let s = sample0(p);
+    if !(s.depth > 0.0) || params.samples == 0u {
+        raw[p] = vec4<f32>(0.0);
+        return;
+    }
+    let c = view_position(frame, vec2<f32>(gid.xy) + 0.5, s.depth);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
+    let r_px = params.radius * pixels_per_unit(frame, s.depth);
+    var sum = vec3<f32>(0.0);
+    var m = 0u;
+    for (var i = 0u; i < params.samples; i++) {
+        let tap = spiral_tap_turned(gid.xy, i, params.samples, r_px, params.turn);
+        if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
+            continue;
+        }
+        let q = u32(tap.y) * frame.width + u32(tap.x);
+        let at = vec2<f32>(tap) + 0.5;
+        for (var layer = 0u; layer < 2u; layer++) {
+            var y: GSample;
+            if layer == 0u {
+                y = sample0(q);
+            } else {
+                y = sample1(q);
+            }
+            if !(y.depth > 0.0) {
+                continue;
+            }
+            let v = view_position(frame, at, y.depth) - c;
+            let len = length(v);
+            if !(len > 1e-6) {
+                continue;
+            }
+            let w = v / len;
+            let wn_x = dot(w, n);
+            let wn_y = dot(w, normalize(mat_mul(frame.view, vec4<f32>(y.normal, 0.0)).xyz));
+            if wn_x > 0.0 && (params.normal_test == 0u || wn_y < 0.0) {
+                var radiance: vec3<f32>;
+                if layer == 0u {
+                    radiance = b0[q].rgb;
+                } else {
+                    radiance = b1[q].rgb;
+                }
+                sum += radiance * wn_x;
+                m += 1u;
+                break;
+            }
+        }
+    }
+    var e = vec3<f32>(0.0);
+    if m > 0u {
+        e = 2.0 * PI_R / f32(m) * sum;
+    }
+    raw[p] = vec4<f32>(e, f32(m) / f32(params.samples));
+}
+
+@compute @workgroup_size(8, 8)
+fn radiosity_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let current = raw[p];
+    var e = select(vec4<f32>(0.0), current, finite3(current.rgb) && abs(current.a) <= 1.0);
+    let h = history_at(gid.xy, sample0(p));
+    if h.a > 0.0 {
+        e = vec4<f32>(mix(e.rgb, h.rgb, params.alpha), e.a);
+    }
+    history_out[p] = select(vec4<f32>(0.0), e, finite3(e.rgb));
+}
