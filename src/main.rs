@@ -289,17 +289,35 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         }
         // Each lighting term alone: direct radiance, and the radiosity term (the diffuse albedo
         // times the irradiance, times its confidence), tone mapped like the image.
-        let direct = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.direct_buffer().expect("rendered"))?;
-        output::write_png_linear(&dir.join("direct.png"), w, h, &output::tonemap(&direct, args.exposure))?;
+        let direct = renderer.read_rgb(
+            &gpu.device,
+            &gpu.queue,
+            renderer.direct_buffer().expect("rendered"),
+        )?;
+        output::write_png_linear(
+            &dir.join("direct.png"),
+            w,
+            h,
+            &output::tonemap(&direct, args.exposure),
+        )?;
         output::write_exr(&dir.join("direct.exr"), w, h, &direct)?;
         if let Some([.., irradiance]) = renderer.radiosity_buffers() {
             let e = renderer.read_f32(&gpu.device, &gpu.queue, irradiance)?;
             let term: Vec<Vec3> = e
                 .chunks_exact(4)
                 .zip(&layers[0].samples)
-                .map(|(c, s)| (1.0 - s.metallic) * s.base_color / std::f32::consts::PI * Vec3::new(c[0], c[1], c[2]) * c[3].clamp(0.0, 1.0))
+                .map(|(c, s)| {
+                    (1.0 - s.metallic) * s.base_color / std::f32::consts::PI
+                        * Vec3::new(c[0], c[1], c[2])
+                        * c[3].clamp(0.0, 1.0)
+                })
                 .collect();
-            output::write_png_linear(&dir.join("radiosity.png"), w, h, &output::tonemap(&term, args.exposure))?;
+            output::write_png_linear(
+                &dir.join("radiosity.png"),
+                w,
+                h,
+                &output::tonemap(&term, args.exposure),
+            )?;
             output::write_exr(&dir.join("radiosity.exr"), w, h, &term)?;
         }
     }

@@ -498,7 +498,7 @@ impl Renderer {
         &self.passes
     }
 
-    /// Records one frame (raster both layers, resolve) into `encoder`. Submit it, then read the
+    /// Records one frame, every pass of its [`plan`](Renderer::plan), into `encoder`. Submit it, then read the
     /// results with [`read_gbuffer`](Renderer::read_gbuffer) or use
     /// [`gbuffer_buffer`](Renderer::gbuffer_buffer) in your own passes.
     pub fn encode(

@@ -7,6 +7,7 @@
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/gbuffer_read.wgsl"
 
 const DEPTH_TOLERANCE: f32 = 0.05;
 
@@ -30,13 +31,6 @@ alias Value = f32;
 @group(0) @binding(3) var<storage, read> source: array<Value>;
 @group(0) @binding(4) var<storage, read_write> blurred: array<Value>;
 
-fn sample_at(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u], gbuffer[p * G_WORDS + 2u], gbuffer[p * G_WORDS + 3u]);
-#endif
-}
 
 @compute @workgroup_size(8, 8)
 fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {

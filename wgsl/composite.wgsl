@@ -9,6 +9,7 @@
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/gbuffer_read.wgsl"
 
 // Mirrors `CompositeUniform` in src/passes/composite.rs.
 struct Composite {
@@ -28,13 +29,6 @@ struct Composite {
 @group(0) @binding(6) var<storage, read> radiosity: array<vec4<f32>>;
 #endif
 
-fn sample_at(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u], gbuffer[p * G_WORDS + 2u], gbuffer[p * G_WORDS + 3u]);
-#endif
-}
 
 @compute @workgroup_size(8, 8)
 fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {

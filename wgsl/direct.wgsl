@@ -8,6 +8,7 @@
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/gbuffer_read.wgsl"
 #include "shared/light.wgsl"
 #include "shared/shadow.wgsl"
 
@@ -66,13 +67,6 @@ fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>) ->
 }
 #endif
 
-fn sample_at(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u], gbuffer[p * G_WORDS + 2u], gbuffer[p * G_WORDS + 3u]);
-#endif
-}
 
 @compute @workgroup_size(8, 8)
 fn direct_main(@builtin(global_invocation_id) gid: vec3<u32>) {

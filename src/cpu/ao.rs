@@ -2,6 +2,8 @@
 
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
+use crate::cpu::frame::mat_mul;
+pub use crate::cpu::frame::view_position;
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;
@@ -9,25 +11,6 @@ use crate::passes::pyramid::PyramidLayout;
 use crate::settings::AoSettings;
 
 const LOG_MAX_OFFSET: i32 = 3;
-
-fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
-    glam::Vec4::from_array(std::array::from_fn(|c| {
-        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
-    }))
-}
-
-/// As `view_position` in `wgsl/shared/frame.wgsl`.
-pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
-    let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);
-    if f.ortho != 0 {
-        return Vec3::new(
-            (ndc.x - f.proj[3][0]) / f.proj[0][0],
-            (ndc.y - f.proj[3][1]) / f.proj[1][1],
-            -d,
-        );
-    }
-    Vec3::new(ndc.x * d / f.proj[0][0], ndc.y * d / f.proj[1][1], -d)
-}
 
 /// As `texel_origin` in the WGSL: the level-0 pixel a pyramid texel was taken from.
 fn texel_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {

@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
-use crate::cpu::ao::view_position;
+use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::shadow::{Shadows, shadow};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;
@@ -51,12 +51,6 @@ pub fn brdf(n: Vec3, v: Vec3, l: Vec3, albedo: Vec3, roughness: f32, metallic: f
     let f0 = Vec3::splat(0.04).lerp(albedo, metallic);
     let fresnel = f0 + (Vec3::ONE - f0) * (1.0 - vh).powf(5.0);
     (1.0 - metallic) * albedo / PI + distribution * visibility * fresnel
-}
-
-pub(crate) fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
-    glam::Vec4::from_array(std::array::from_fn(|c| {
-        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
-    }))
 }
 
 /// Outgoing direct radiance of every pixel of `layer` (zero where there is no surface).

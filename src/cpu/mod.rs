@@ -5,6 +5,7 @@ pub mod ao;
 pub mod blur;
 pub mod composite;
 pub mod direct;
+pub mod frame;
 pub mod pyramid;
 pub mod radiosity;
 pub mod raster;

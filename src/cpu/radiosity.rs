@@ -5,8 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
-use crate::cpu::ao::view_position;
-use crate::cpu::direct::mat_mul;
+use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;

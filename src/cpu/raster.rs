@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use crate::cpu::frame::{mat_mul, view_position};
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
 use crate::gpu::FrameUniform;
 
@@ -37,17 +38,13 @@ pub fn double_sided_triangles(scene: &crate::Scene) -> Vec<bool> {
 
 type ClipVertex = [f32; 4];
 
-fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
-    std::array::from_fn(|c| ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3])
-}
-
 fn finite(x: f32) -> bool {
     x.abs() <= 3.0e38
 }
 
 fn transform(f: &FrameUniform, p: Vec3) -> ClipVertex {
-    let v = mat_mul(&f.view, [p.x, p.y, p.z, 1.0]);
-    let c = mat_mul(&f.proj, v);
+    let v = mat_mul(&f.view, [p.x, p.y, p.z, 1.0]).to_array();
+    let c = mat_mul(&f.proj, v).to_array();
     [c[0], c[1], c[3], -v[2]]
 }
 
@@ -231,18 +228,6 @@ pub fn rasterize(
     }
 }
 
-fn view_position(f: &FrameUniform, px: [f32; 2], d: f32) -> [f32; 3] {
-    let ndc = [px[0] / f.width as f32 * 2.0 - 1.0, 1.0 - px[1] / f.height as f32 * 2.0];
-    if f.ortho != 0 {
-        return [
-            (ndc[0] - f.proj[3][0]) / f.proj[0][0],
-            (ndc[1] - f.proj[3][1]) / f.proj[1][1],
-            -d,
-        ];
-    }
-    [ndc[0] * d / f.proj[0][0], ndc[1] * d / f.proj[1][1], -d]
-}
-
 fn depth_of(word: u64) -> Option<f32> {
     (word != VIS_EMPTY).then(|| f32::from_bits((word >> 32) as u32))
 }
@@ -252,9 +237,9 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
     if !reproject {
         return depth_of(zref[(y * f.width + x) as usize]).is_some_and(|z0| d > z0 + f.dz);
     }
-    let vp = view_position(f, [x as f32 + 0.5, y as f32 + 0.5], d);
-    let world = mat_mul(&f.inv_view, [vp[0], vp[1], vp[2], 1.0]);
-    let pc = mat_mul(&f.prev_view_proj, world);
+    let vp = view_position(f, glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5), d);
+    let world = mat_mul(&f.inv_view, vp.extend(1.0).to_array()).to_array();
+    let pc = mat_mul(&f.prev_view_proj, world).to_array();
     if pc[3].is_nan() || pc[3] <= 0.0 {
         return false;
     }
@@ -267,7 +252,7 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
         return false;
     }
     let (px, py) = (prev[0] as u32, prev[1] as u32);
-    let prev_d = -mat_mul(&f.prev_view, world)[2];
+    let prev_d = -mat_mul(&f.prev_view, world).z;
     depth_of(zref[(py * f.width + px) as usize]).is_some_and(|z0| prev_d > z0 + f.dz)
 }
 

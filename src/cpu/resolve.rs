@@ -2,27 +2,10 @@
 
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
+use crate::cpu::frame::{mat_mul, view_position};
 use crate::gbuffer::{GSample, VIS_EMPTY};
 use crate::gpu::FrameUniform;
 use crate::scene::{Material, Scene, Texture};
-
-fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> glam::Vec4 {
-    glam::Vec4::from_array(std::array::from_fn(|c| {
-        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
-    }))
-}
-
-fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
-    let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);
-    if f.ortho != 0 {
-        return Vec3::new(
-            (ndc.x - f.proj[3][0]) / f.proj[0][0],
-            (ndc.y - f.proj[3][1]) / f.proj[1][1],
-            -d,
-        );
-    }
-    Vec3::new(ndc.x * d / f.proj[0][0], ndc.y * d / f.proj[1][1], -d)
-}
 
 fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }

@@ -101,6 +101,22 @@ pub fn scoped<T>(device: &wgpu::Device, label: &str, f: impl FnOnce() -> Result<
     }
 }
 
+/// Binds `entries` to `pipeline` and dispatches one 8x8 workgroup per 8x8 pixels of `size`
+/// (every per-pixel kernel uses `@workgroup_size(8, 8)`).
+pub fn dispatch_pixels(
+    device: &wgpu::Device,
+    pass: &mut wgpu::ComputePass<'_>,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    entries: &[(u32, &wgpu::Buffer)],
+    size: (u32, u32),
+) {
+    let group = bind_group(device, label, pipeline, entries);
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+}
+
 /// Workgroup counts for `groups` one-dimensional workgroups, folded into y past the 65535 limit.
 pub fn dispatch_size(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, 65535);

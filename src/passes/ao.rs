@@ -83,9 +83,6 @@ impl AoPass {
         if self.two_layers {
             entries.push((4, pyramids[1]));
         }
-        let group = gpu::bind_group(device, "deep-gbuffer.ao", &self.pipeline, &entries);
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        gpu::dispatch_pixels(device, pass, "deep-gbuffer.ao", &self.pipeline, &entries, size);
     }
 }

@@ -62,10 +62,7 @@ impl BlurPass {
             self.pipelines.iter().zip([(source, scratch), (scratch, target)])
         {
             let entries = [(0, frame), (1, &self.uniform), (2, gbuffer0), (3, from), (4, to)];
-            let group = gpu::bind_group(device, "deep-gbuffer.blur", pipeline, &entries);
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+            gpu::dispatch_pixels(device, pass, "deep-gbuffer.blur", pipeline, &entries, size);
         }
     }
 }

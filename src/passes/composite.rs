@@ -71,9 +71,6 @@ impl CompositePass {
         }
         let pipeline =
             &self.pipelines[usize::from(av.is_some()) + 2 * usize::from(radiosity.is_some())];
-        let group = gpu::bind_group(device, "deep-gbuffer.composite", pipeline, &entries);
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        gpu::dispatch_pixels(device, pass, "deep-gbuffer.composite", pipeline, &entries, size);
     }
 }

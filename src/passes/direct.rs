@@ -73,9 +73,6 @@ impl DirectPass {
         if let Some(s) = &shadows {
             entries.extend([(5, s.faces), (6, s.light_faces), (7, s.atlas)]);
         }
-        let group = gpu::bind_group(device, "deep-gbuffer.direct", pipeline, &entries);
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        gpu::dispatch_pixels(device, pass, "deep-gbuffer.direct", pipeline, &entries, size);
     }
 }

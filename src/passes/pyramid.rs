@@ -127,10 +127,14 @@ impl PyramidPass {
             } else {
                 vec![(0, &self.uniforms[i]), (2, pyramid)]
             };
-            let group = gpu::bind_group(device, "deep-gbuffer.pyramid", pipeline, &entries);
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(level.width.div_ceil(8), level.height.div_ceil(8), 1);
+            gpu::dispatch_pixels(
+                device,
+                pass,
+                "deep-gbuffer.pyramid",
+                pipeline,
+                &entries,
+                (level.width, level.height),
+            );
         }
     }
 }

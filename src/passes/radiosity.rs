@@ -113,10 +113,7 @@ impl RadiosityPass {
             (8, t.raw),
         ];
         for (pipeline, entries) in [(&self.feedback, &feedback[..]), (&self.gather, &gather[..])] {
-            let group = gpu::bind_group(device, "deep-gbuffer.radiosity", pipeline, entries);
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+            gpu::dispatch_pixels(device, pass, "deep-gbuffer.radiosity", pipeline, entries, size);
         }
     }
 
@@ -138,10 +135,13 @@ impl RadiosityPass {
             (11, t.prev_vis[0]),
             (12, t.prev_vis[1]),
         ];
-        let group =
-            gpu::bind_group(device, "deep-gbuffer.radiosity.temporal", &self.temporal, &entries);
-        pass.set_pipeline(&self.temporal);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        gpu::dispatch_pixels(
+            device,
+            pass,
+            "deep-gbuffer.radiosity.temporal",
+            &self.temporal,
+            &entries,
+            size,
+        );
     }
 }

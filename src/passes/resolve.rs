@@ -33,8 +33,9 @@ impl ResolvePass {
         height: u32,
     ) {
         let b = scene.buffers();
-        let group = gpu::bind_group(
+        gpu::dispatch_pixels(
             device,
+            pass,
             "deep-gbuffer.resolve",
             &self.pipeline,
             &[
@@ -49,9 +50,7 @@ impl ResolvePass {
                 (8, vis),
                 (9, gbuffer),
             ],
+            (width, height),
         );
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
     }
 }

@@ -1,0 +1,25 @@
+//! CPU mirror of `wgsl/shared/frame.wgsl`.
+
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::gpu::FrameUniform;
+
+/// As `mat_mul`: `m * v` summed in the WGSL's order.
+pub fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> Vec4 {
+    Vec4::from_array(std::array::from_fn(|c| {
+        ((m[0][c] * v[0] + m[1][c] * v[1]) + m[2][c] * v[2]) + m[3][c] * v[3]
+    }))
+}
+
+/// As `view_position`: the view-space point at view depth `d` through pixel coordinate `px`.
+pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
+    let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);
+    if f.ortho != 0 {
+        return Vec3::new(
+            (ndc.x - f.proj[3][0]) / f.proj[0][0],
+            (ndc.y - f.proj[3][1]) / f.proj[1][1],
+            -d,
+        );
+    }
+    Vec3::new(ndc.x * d / f.proj[0][0], ndc.y * d / f.proj[1][1], -d)
+}
