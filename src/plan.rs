@@ -21,11 +21,13 @@ pub struct Effects {
     pub shadows: bool,
     /// Screen-space radiosity (needs a light or an emissive material).
     pub radiosity: bool,
+    /// Screen-space reflections (need a reflective material).
+    pub reflections: bool,
 }
 
 impl Default for Effects {
     fn default() -> Self {
-        Effects { ao: true, direct: true, shadows: true, radiosity: true }
+        Effects { ao: true, direct: true, shadows: true, radiosity: true, reflections: true }
     }
 }
 
@@ -35,18 +37,25 @@ impl Effects {
         if text.trim() == "auto" {
             return Ok(Effects::default());
         }
-        let mut e = Effects { ao: false, direct: false, shadows: false, radiosity: false };
+        let mut e = Effects {
+            ao: false,
+            direct: false,
+            shadows: false,
+            radiosity: false,
+            reflections: false,
+        };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
                 "ao" => e.ao = true,
                 "direct" => e.direct = true,
                 "shadows" => e.shadows = true,
                 "radiosity" => e.radiosity = true,
+                "reflections" => e.reflections = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
                         format!(
-                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity; or auto)"
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections; or auto)"
                         ),
                     ));
                 }
@@ -80,6 +89,8 @@ pub struct Plan {
     pub direct: Reason,
     /// Screen-space radiosity.
     pub radiosity: Reason,
+    /// Screen-space reflections.
+    pub reflections: Reason,
     /// Names of the lights that get shadow maps (pass `shadow.<name>` each).
     pub shadows: Vec<String>,
     /// Pass names in order, as `--timings` names them (steady state: a one-pass layer-1
@@ -102,8 +113,11 @@ impl Plan {
             settings.radiosity.enabled && settings.effects.radiosity,
             !info.lights.is_empty() || info.emissive,
         );
-        let wants_layer1 =
-            (ao == Reason::Runs && settings.ao.two_layers) || radiosity == Reason::Runs;
+        let reflections =
+            reason(settings.reflections.enabled && settings.effects.reflections, info.reflective);
+        let wants_layer1 = (ao == Reason::Runs && settings.ao.two_layers)
+            || radiosity == Reason::Runs
+            || reflections == Reason::Runs;
         let layers = match settings.layers {
             1 => 1,
             2 => 2,
@@ -141,6 +155,9 @@ impl Plan {
                 passes.push("radiosity.blur".into());
             }
         }
+        if reflections == Reason::Runs {
+            passes.push("reflections".into());
+        }
         passes.push("composite".into());
         Plan {
             layers,
@@ -148,6 +165,7 @@ impl Plan {
             ao_two_layers: layers == 2 && settings.ao.two_layers,
             direct,
             radiosity,
+            reflections,
             shadows,
             passes,
         }
@@ -170,6 +188,7 @@ impl fmt::Display for Plan {
         )?;
         writeln!(f, "direct:  {}", why(self.direct))?;
         writeln!(f, "radiosity: {}", why(self.radiosity))?;
+        writeln!(f, "reflections: {}", why(self.reflections))?;
         if self.shadows.is_empty() {
             writeln!(f, "shadows: none")?;
         } else {

@@ -12,6 +12,7 @@ use crate::passes::fill::FillPass;
 use crate::passes::pyramid::PyramidPass;
 use crate::passes::radiosity::{RadiosityPass, RadiosityTargets, RadiosityUniform};
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
+use crate::passes::reflections::{ReflectionTargets, ReflectionsPass, ReflectionsUniform};
 use crate::passes::resolve::ResolvePass;
 use crate::passes::shadow::{self, ShadowFace};
 use crate::plan::{Plan, Reason};
@@ -57,7 +58,48 @@ pub struct Renderer {
     shading: Option<ShadingStage>,
     shadows: Option<ShadowStage>,
     radiosity: Option<RadiosityStage>,
+    reflections: Option<ReflectionsStage>,
     plan: Option<Plan>,
+}
+
+/// Reflections: the kernels, the tile list, its indirect arguments and the reflected radiance.
+struct ReflectionsStage {
+    pass: ReflectionsPass,
+    tiles: wgpu::Buffer,
+    args: wgpu::Buffer,
+    output: wgpu::Buffer,
+    tiles_x: u32,
+    tiles_y: u32,
+}
+
+impl ReflectionsStage {
+    fn new(device: &wgpu::Device, s: &Settings) -> ReflectionsStage {
+        let (tiles_x, tiles_y) = (s.width.div_ceil(8), s.height.div_ceil(8));
+        let pixels = u64::from(s.width) * u64::from(s.height);
+        ReflectionsStage {
+            pass: ReflectionsPass::new(device, s.precision),
+            tiles: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.reflections.tiles",
+                (u64::from(tiles_x * tiles_y) + 1) * 4,
+                wgpu::BufferUsages::empty(),
+            ),
+            args: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.reflections.args",
+                16,
+                wgpu::BufferUsages::INDIRECT,
+            ),
+            output: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.reflections.output",
+                pixels * 16,
+                wgpu::BufferUsages::empty(),
+            ),
+            tiles_x,
+            tiles_y,
+        }
+    }
 }
 
 /// Radiosity: the kernels, the outgoing radiance of both layers, the gathered irradiance, the
@@ -393,6 +435,7 @@ impl Renderer {
             shading: None,
             shadows: None,
             radiosity: None,
+            reflections: None,
             plan: None,
             settings,
         })
@@ -458,6 +501,13 @@ impl Renderer {
         ])
     }
 
+    /// The reflected radiance (rgb, scaled by the reflectivity) and its confidence (a) of the
+    /// last frame, `vec4<f32>` per pixel; `None` when no reflection pass ran.
+    pub fn reflections_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.plan.as_ref().filter(|p| p.reflections == Reason::Runs)?;
+        self.reflections.as_ref().map(|r| &r.output)
+    }
+
     /// The HDR image of the last frame: `vec4<f32>` per pixel, linear radiance (a = 1 on
     /// surfaces, 0 on the sky).
     pub fn hdr_buffer(&self) -> Option<&wgpu::Buffer> {
@@ -467,6 +517,11 @@ impl Renderer {
     /// The direct radiance of the last frame (`vec4<f32>` per pixel; zero when no light runs).
     pub fn direct_buffer(&self) -> Option<&wgpu::Buffer> {
         self.shading.as_ref().map(|s| &s.radiance)
+    }
+
+    /// The direct radiance of layer 1 (computed when radiosity or reflections read it).
+    pub fn direct1_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.shading.as_ref().map(|s| &s.radiance1)
     }
 
     /// Reads a `vec4<f32>` per-pixel image (HDR, direct radiance) back as rgb.
@@ -529,6 +584,9 @@ impl Renderer {
         }
         if self.shading.is_none() {
             self.shading = Some(ShadingStage::new(device, &self.settings));
+        }
+        if plan.reflections == Reason::Runs && self.reflections.is_none() {
+            self.reflections = Some(ReflectionsStage::new(device, &self.settings));
         }
         let radiosity_history = self.history.is_some() && self.radiosity.is_some();
         if plan.radiosity == Reason::Runs {
@@ -714,7 +772,7 @@ impl Renderer {
         }
         if plan.direct == Reason::Runs {
             let mut pass = begin(encoder, "direct");
-            let layer1 = plan.radiosity == Reason::Runs;
+            let layer1 = plan.radiosity == Reason::Runs || plan.reflections == Reason::Runs;
             let targets =
                 [(&self.gbuffer[0], &shading.radiance), (&self.gbuffer[1], &shading.radiance1)];
             for (gbuffer, radiance) in targets.into_iter().take(1 + usize::from(layer1)) {
@@ -774,6 +832,31 @@ impl Renderer {
                 );
             }
         }
+        let reflections_stage =
+            self.reflections.as_ref().filter(|_| plan.reflections == Reason::Runs);
+        if let Some(r) = reflections_stage {
+            encoder.clear_buffer(&r.tiles, 0, None);
+            encoder.clear_buffer(&r.output, 0, None);
+            let mut pass = begin(encoder, "reflections");
+            let uniform = ReflectionsUniform {
+                sky: scene.info().ambient.to_array(),
+                max_distance: s.reflections.max_distance,
+                thickness: s.reflections.thickness,
+                tiles_x: r.tiles_x,
+                tiles_y: r.tiles_y,
+                _pad: 0,
+            };
+            let targets = ReflectionTargets {
+                frame: &self.frame,
+                gbuffer0: &self.gbuffer[0],
+                vis1: &self.vis1,
+                radiance: [&shading.radiance, &shading.radiance1],
+                tiles: &r.tiles,
+                args: &r.args,
+                output: &r.output,
+            };
+            r.pass.encode(device, &mut pass, &uniform, &targets);
+        }
         {
             let mut pass = begin(encoder, "composite");
             let av = ao_stage.map(|ao| if s.ao.blur_radius > 0 { &ao.av[2] } else { &ao.av[0] });
@@ -789,6 +872,7 @@ impl Renderer {
                 &shading.radiance,
                 av,
                 radiosity,
+                reflections_stage.map(|r| &r.output),
                 &shading.hdr,
                 size,
             );

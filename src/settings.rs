@@ -194,6 +194,42 @@ impl RadiositySettings {
     }
 }
 
+/// Screen-space reflections (`wgsl/reflections.wgsl`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReflectionSettings {
+    /// Run the reflection pass where a material reflects.
+    pub enabled: bool,
+    /// How far a reflection ray is marched, in scene units (48 steps).
+    pub max_distance: f32,
+    /// How far behind a surface a ray may pass and still hit it, in scene units.
+    pub thickness: f32,
+}
+
+impl Default for ReflectionSettings {
+    fn default() -> Self {
+        ReflectionSettings { enabled: true, max_distance: 3.0, thickness: 0.1 }
+    }
+}
+
+impl ReflectionSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.max_distance.is_finite() && self.max_distance > 0.0) {
+            return Err(Error::setting(
+                "reflections.max_distance",
+                format!("{} (must be finite and > 0)", self.max_distance),
+            ));
+        }
+        if !(self.thickness.is_finite() && self.thickness > 0.0) {
+            return Err(Error::setting(
+                "reflections.thickness",
+                format!("{} (must be finite and > 0)", self.thickness),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Shadow maps (`src/passes/shadow.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadowSettings {
@@ -253,6 +289,8 @@ pub struct Settings {
     pub shadows: ShadowSettings,
     /// Screen-space radiosity.
     pub radiosity: RadiositySettings,
+    /// Screen-space reflections.
+    pub reflections: ReflectionSettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: crate::plan::Effects,
 }
@@ -271,6 +309,7 @@ impl Default for Settings {
             ao: AoSettings::default(),
             shadows: ShadowSettings::default(),
             radiosity: RadiositySettings::default(),
+            reflections: ReflectionSettings::default(),
             effects: crate::plan::Effects::default(),
         }
     }
@@ -313,6 +352,9 @@ impl Settings {
         }
         if self.radiosity.enabled {
             self.radiosity.validate()?;
+        }
+        if self.reflections.enabled {
+            self.reflections.validate()?;
         }
         Ok(())
     }

@@ -3,9 +3,10 @@
 //     conf * E + (1 - conf) * AV * pi * ambient,
 // where E is the radiosity irradiance and conf its confidence M / N (both 0 without RADIOSITY,
 // which leaves AV * ambient * albedo), and AV is 1 without obscurance (AO undefined). Pixels
-// without a surface show the sky. The reflection term joins this sum with its kernel.
+// without a surface show the sky. With REFLECTIONS the reflected radiance (already scaled by the
+// reflectivity) is added.
 // src/cpu/composite.rs is the same on the CPU.
-// defines: PACKED AO RADIOSITY
+// defines: PACKED AO RADIOSITY REFLECTIONS
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -27,6 +28,9 @@ struct Composite {
 @group(0) @binding(5) var<storage, read_write> hdr: array<vec4<f32>>;
 #if RADIOSITY
 @group(0) @binding(6) var<storage, read> radiosity: array<vec4<f32>>;
+#endif
+#if REFLECTIONS
+@group(0) @binding(7) var<storage, read> reflections: array<vec4<f32>>;
 #endif
 
 
@@ -53,5 +57,9 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #endif
     let albedo = (1.0 - s.metallic) * s.base_color;
     let reflected = albedo * (confidence / 3.14159265 * e + (1.0 - confidence) * visibility * composite.ambient);
-    hdr[p] = vec4<f32>(direct[p].rgb + reflected + s.emissive, 1.0);
+    var mirrored = vec3<f32>(0.0);
+#if REFLECTIONS
+    mirrored = reflections[p].rgb;
+#endif
+    hdr[p] = vec4<f32>(direct[p].rgb + reflected + mirrored + s.emissive, 1.0);
 }

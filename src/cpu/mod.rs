@@ -9,6 +9,7 @@ pub mod frame;
 pub mod pyramid;
 pub mod radiosity;
 pub mod raster;
+pub mod reflections;
 pub mod resolve;
 pub mod shadow;
 pub mod spiral;

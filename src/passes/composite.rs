@@ -16,14 +16,14 @@ struct CompositeUniform {
 
 /// The composite kernel, with and without AV and radiosity inputs.
 pub struct CompositePass {
-    /// Indexed by `ao as usize + 2 * radiosity as usize`.
-    pipelines: [wgpu::ComputePipeline; 4],
+    /// Indexed by `ao + 2 radiosity + 4 reflections`.
+    pipelines: [wgpu::ComputePipeline; 8],
 }
 
 impl CompositePass {
     /// Builds the pipelines.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let pipelines = [0usize, 1, 2, 3].map(|variant| {
+        let pipelines = [0usize, 1, 2, 3, 4, 5, 6, 7].map(|variant| {
             let mut defines = Vec::new();
             if precision == Precision::Packed {
                 defines.push("PACKED");
@@ -33,6 +33,9 @@ impl CompositePass {
             }
             if variant & 2 != 0 {
                 defines.push("RADIOSITY");
+            }
+            if variant & 4 != 0 {
+                defines.push("REFLECTIONS");
             }
             gpu::compute_pipeline(device, "composite", "composite_main", &defines)
         });
@@ -51,6 +54,7 @@ impl CompositePass {
         direct: &wgpu::Buffer,
         av: Option<&wgpu::Buffer>,
         radiosity: Option<&wgpu::Buffer>,
+        reflections: Option<&wgpu::Buffer>,
         hdr: &wgpu::Buffer,
         size: (u32, u32),
     ) {
@@ -69,8 +73,12 @@ impl CompositePass {
         if let Some(radiosity) = radiosity {
             entries.push((6, radiosity));
         }
-        let pipeline =
-            &self.pipelines[usize::from(av.is_some()) + 2 * usize::from(radiosity.is_some())];
+        if let Some(reflections) = reflections {
+            entries.push((7, reflections));
+        }
+        let pipeline = &self.pipelines[usize::from(av.is_some())
+            + 2 * usize::from(radiosity.is_some())
+            + 4 * usize::from(reflections.is_some())];
         gpu::dispatch_pixels(device, pass, "deep-gbuffer.composite", pipeline, &entries, size);
     }
 }

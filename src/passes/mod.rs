@@ -9,5 +9,6 @@ pub mod fill;
 pub mod pyramid;
 pub mod radiosity;
 pub mod raster;
+pub mod reflections;
 pub mod resolve;
 pub mod shadow;
