@@ -1,9 +1,12 @@
-//! deep-gbuffer: two-layer deep G-buffers by compute software rasterization on wgpu.
+//! deep-gbuffer: two-layer deep G-buffers by compute software rasterization on wgpu, and global
+//! illumination from them.
 //!
 //! Both layers are rasterized in compute shaders into visibility buffers (layer 0: a 64-bit
 //! `atomicMin` of `(view depth << 32) | triangle id`; layer 1: the nearest surface at least Δz
-//! behind layer 0), then resolved into G-buffer attributes. The [`Renderer`] borrows the
-//! caller's device and records into the caller's command encoder.
+//! behind layer 0), then resolved into G-buffer attributes, from which compute kernels derive
+//! `DIRECT + AV * AMBIENT + RADIOSITY + REFLECTIONS`, running only the passes the scene calls for
+//! (the [`Plan`]). The [`Renderer`] borrows the caller's device and records into the caller's
+//! command encoder.
 //!
 //! ```no_run
 //! use deep_gbuffer::{gpu::{Gpu, GpuOptions}, Renderer, Scene, SceneBuffers, Settings};
@@ -12,8 +15,17 @@
 //! let scene = Scene::from_spec("builtin:cornell")?;
 //! let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
 //! let mut renderer = Renderer::new(&gpu.device, &gpu.queue, Settings::with_size(320, 240))?;
+//! // The host's own target: the composite lands here, vec4<f32> per pixel.
+//! let target = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+//!     label: Some("host.target"),
+//!     size: 320 * 240 * 16,
+//!     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+//!     mapped_at_creation: false,
+//! });
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! renderer.encode(&gpu.device, &gpu.queue, &mut encoder, &buffers, &scene.camera_or_default())?;
+//! // ... the host's passes before ...
+//! renderer.encode_to(&gpu.device, &gpu.queue, &mut encoder, &buffers, &scene.camera_or_default(), &target)?;
+//! // ... the host's passes after, reading `target` or `renderer.gbuffer_buffer(0)` ...
 //! gpu.queue.submit([encoder.finish()]);
 //! let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
 //! # Ok(()) }
