@@ -9,6 +9,7 @@ use crate::passes::blur::BlurPass;
 use crate::passes::composite::CompositePass;
 use crate::passes::direct::{DirectPass, ShadowInputs};
 use crate::passes::fill::FillPass;
+use crate::passes::present::PresentPass;
 use crate::passes::pyramid::PyramidPass;
 use crate::passes::radiosity::{RadiosityPass, RadiosityTargets, RadiosityUniform};
 use crate::passes::raster::{self, RasterMode, RasterPass, RasterTargets};
@@ -59,6 +60,7 @@ pub struct Renderer {
     shadows: Option<ShadowStage>,
     radiosity: Option<RadiosityStage>,
     reflections: Option<ReflectionsStage>,
+    present: Option<PresentPass>,
     plan: Option<Plan>,
 }
 
@@ -436,6 +438,7 @@ impl Renderer {
             shadows: None,
             radiosity: None,
             reflections: None,
+            present: None,
             plan: None,
             settings,
         })
@@ -917,6 +920,54 @@ impl Renderer {
         self.encode(device, queue, encoder, scene, camera)?;
         let hdr = self.hdr_buffer().expect("encode creates it");
         encoder.copy_buffer_to_buffer(hdr, 0, target, 0, bytes);
+        Ok(())
+    }
+
+    /// [`encode`](Renderer::encode), then writes the HDR composite into the caller's storage
+    /// texture: `Rgba32Float` or `Rgba16Float`, the renderer's size, with STORAGE_BINDING usage.
+    pub fn encode_to_texture(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        texture: &wgpu::Texture,
+    ) -> Result<()> {
+        let f16 = match texture.format() {
+            wgpu::TextureFormat::Rgba32Float => false,
+            wgpu::TextureFormat::Rgba16Float => true,
+            other => {
+                return Err(Error::ImportedBuffer {
+                    name: "texture",
+                    message: format!("format {other:?}; expected Rgba32Float or Rgba16Float"),
+                });
+            }
+        };
+        let (w, h) = (self.settings.width, self.settings.height);
+        let size = texture.size();
+        if (size.width, size.height) != (w, h)
+            || !texture.usage().contains(wgpu::TextureUsages::STORAGE_BINDING)
+        {
+            return Err(Error::ImportedBuffer {
+                name: "texture",
+                message: format!(
+                    "{}x{} with {:?}; needs {w}x{h} and STORAGE_BINDING",
+                    size.width,
+                    size.height,
+                    texture.usage()
+                ),
+            });
+        }
+        self.encode(device, queue, encoder, scene, camera)?;
+        let present = self.present.get_or_insert_with(|| PresentPass::new(device));
+        let hdr = &self.shading.as_ref().expect("encode creates it").hdr;
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("deep-gbuffer.present"),
+            timestamp_writes: None,
+        });
+        present.encode(device, &mut pass, &self.frame, hdr, &view, f16, (w, h));
         Ok(())
     }
 

@@ -131,3 +131,96 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
     let mut encoder = device.create_command_encoder(&Default::default());
     assert!(renderer.encode_to(&device, &queue, &mut encoder, &scene, &camera, &small).is_err());
 }
+
+/// The same stage writing into the host's rgba16float storage texture.
+#[test]
+fn composite_into_the_hosts_storage_texture() {
+    let (device, queue) = host_device();
+    let scene = deep_gbuffer::Scene::from_spec("builtin:cornell").unwrap();
+    let buffers = SceneBuffers::upload(&device, &scene).unwrap();
+    let (w, h) = (32u32, 24u32);
+    let mut renderer = Renderer::new(&device, &queue, Settings::with_size(w, h)).unwrap();
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("host.texture"),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("host.readback"),
+        size: u64::from(256 * h),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    renderer
+        .encode_to_texture(
+            &device,
+            &queue,
+            &mut encoder,
+            &buffers,
+            &scene.camera_or_default(),
+            &texture,
+        )
+        .unwrap();
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(256),
+                rows_per_image: None,
+            },
+        },
+        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    );
+    queue.submit([encoder.finish()]);
+    let bytes = deep_gbuffer::gpu::map_read(&device, &readback).unwrap();
+    let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer().unwrap()).unwrap();
+    let half = |b: &[u8]| {
+        let h = u16::from_le_bytes([b[0], b[1]]);
+        let (sign, exp, frac) =
+            (if h & 0x8000 != 0 { -1.0f32 } else { 1.0 }, (h >> 10) & 0x1f, f32::from(h & 0x3ff));
+        if exp == 0 {
+            sign * frac * 2f32.powi(-24)
+        } else {
+            sign * (1.0 + frac / 1024.0) * 2f32.powi(i32::from(exp) - 15)
+        }
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let texel = &bytes[(y * 256 + x * 8) as usize..][..8];
+            let expected = hdr[(y * w + x) as usize];
+            for (c, e) in [half(&texel[0..2]), half(&texel[2..4]), half(&texel[4..6])]
+                .into_iter()
+                .zip(expected.to_array())
+            {
+                // binary16 keeps 11 significant bits.
+                assert!((c - e).abs() <= e.abs() / 1024.0 + 1e-6, "({x}, {y}): {c} vs {e}");
+            }
+        }
+    }
+    // A texture of the wrong format is a typed error.
+    let wrong = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("host.wrong"),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::STORAGE_BINDING,
+        view_formats: &[],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let camera = scene.camera_or_default();
+    assert!(
+        renderer
+            .encode_to_texture(&device, &queue, &mut encoder, &buffers, &camera, &wrong)
+            .is_err()
+    );
+}

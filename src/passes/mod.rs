@@ -6,6 +6,7 @@ pub mod blur;
 pub mod composite;
 pub mod direct;
 pub mod fill;
+pub mod present;
 pub mod pyramid;
 pub mod radiosity;
 pub mod raster;
