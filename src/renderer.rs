@@ -294,7 +294,6 @@ struct AoStage {
 
 impl AoStage {
     fn new(device: &wgpu::Device, s: &Settings, two_layers: bool) -> AoStage {
-        use wgpu::util::DeviceExt;
         let pyramid = PyramidPass::new(device, s.precision, s.width, s.height);
         let size = pyramid.buffer_size();
         let buffer = |label: &str, size: u64| {
@@ -307,11 +306,11 @@ impl AoStage {
                 buffer("deep-gbuffer.pyramid.layer1", size),
             ],
             ao: AoPass::new(device, s.precision, two_layers),
-            uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("deep-gbuffer.ao"),
-                contents: bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
-                usage: wgpu::BufferUsages::UNIFORM,
-            }),
+            uniform: gpu::uniform_buffer(
+                device,
+                "deep-gbuffer.ao",
+                bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
+            ),
             blur: BlurPass::new(device, s.precision, s.ao.blur_radius, false),
             av: [
                 buffer("deep-gbuffer.ao.raw", pixels),

@@ -27,6 +27,16 @@ pub enum Precision {
     Packed,
 }
 
+impl Precision {
+    /// The WGSL defines of this encoding (`PACKED` or none).
+    pub fn defines(self) -> Vec<&'static str> {
+        match self {
+            Precision::Full => Vec::new(),
+            Precision::Packed => vec!["PACKED"],
+        }
+    }
+}
+
 /// Which atomics the rasterizer uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
 pub enum AtomicPath {

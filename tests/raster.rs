@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{fixture, gpu, render, render_frames, soup};
+use common::{fixture, gpu, mesh, render, render_frames, soup};
 use deep_gbuffer::cpu::raster::{self as cpu, RasterInput, double_sided_triangles};
 use deep_gbuffer::gbuffer::{VIS_EMPTY, vis_depth, vis_id};
 use deep_gbuffer::gpu::FrameUniform;
@@ -136,18 +136,7 @@ fn grid(n: usize, lo: f32, hi: f32, z: f32, jitter: f32, seed: u64) -> Scene {
             indices.extend_from_slice(&[a, a + 1, a + row, a + 1, a + row + 1, a + row]);
         }
     }
-    let mut scene = Scene::default();
-    scene.materials.push(Default::default());
-    scene
-        .push_mesh(deep_gbuffer::scene::MeshData {
-            positions: &positions,
-            normals: &[],
-            uvs: &[],
-            indices: &indices,
-            material: 0,
-        })
-        .unwrap();
-    scene
+    mesh(&positions, &indices, false)
 }
 
 fn coverage(scene: &Scene, frame: &FrameUniform) -> Vec<u32> {

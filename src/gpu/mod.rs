@@ -123,6 +123,15 @@ pub fn dispatch_size(groups: u32) -> (u32, u32) {
     (x, groups.div_ceil(x).max(1))
 }
 
+/// A uniform buffer holding `contents`.
+pub fn uniform_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
 /// A storage buffer of `size` bytes.
 pub fn storage_buffer(
     device: &wgpu::Device,

@@ -56,10 +56,7 @@ pub struct AoPass {
 impl AoPass {
     /// Builds the pipeline; `two_layers` reads both pyramids.
     pub fn new(device: &wgpu::Device, precision: Precision, two_layers: bool) -> Self {
-        let mut defines = Vec::new();
-        if precision == Precision::Packed {
-            defines.push("PACKED");
-        }
+        let mut defines = precision.defines();
         if two_layers {
             defines.push("TWO_LAYERS");
         }

@@ -1,7 +1,6 @@
 //! `wgsl/blur.wgsl`: the separable bilateral blur (horizontal, then vertical).
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use crate::gpu;
 use crate::settings::Precision;
@@ -24,8 +23,7 @@ impl BlurPass {
     /// Builds the pipelines for `precision` G-buffers and a blur `radius` in pixels, for f32
     /// images or (`vec4`) `vec4<f32>` images.
     pub fn new(device: &wgpu::Device, precision: Precision, radius: u32, vec4: bool) -> Self {
-        let mut packed: Vec<&str> =
-            if precision == Precision::Packed { vec!["PACKED"] } else { vec![] };
+        let mut packed = precision.defines();
         if vec4 {
             packed.push("VEC4");
         }
@@ -37,11 +35,11 @@ impl BlurPass {
                 gpu::compute_pipeline(device, "blur", "blur_main", packed),
                 gpu::compute_pipeline(device, "blur", "blur_main", &vertical),
             ],
-            uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("deep-gbuffer.blur"),
-                contents: bytemuck::bytes_of(&BlurUniform { radius, _pad: [0; 3] }),
-                usage: wgpu::BufferUsages::UNIFORM,
-            }),
+            uniform: gpu::uniform_buffer(
+                device,
+                "deep-gbuffer.blur",
+                bytemuck::bytes_of(&BlurUniform { radius, _pad: [0; 3] }),
+            ),
         }
     }
 

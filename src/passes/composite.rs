@@ -24,10 +24,7 @@ impl CompositePass {
     /// Builds the pipelines.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
         let pipelines = [0usize, 1, 2, 3, 4, 5, 6, 7].map(|variant| {
-            let mut defines = Vec::new();
-            if precision == Precision::Packed {
-                defines.push("PACKED");
-            }
+            let mut defines = precision.defines();
             if variant & 1 != 0 {
                 defines.push("AO");
             }

@@ -1,7 +1,6 @@
 //! `wgsl/direct.wgsl`: deferred direct lighting of layer 0, with or without shadow maps.
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use crate::SceneBuffers;
 use crate::gpu;
@@ -36,7 +35,7 @@ pub struct DirectPass {
 impl DirectPass {
     /// Builds the pipelines for `precision` G-buffers.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let packed: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let packed = &precision.defines()[..];
         let mut shadows = packed.to_vec();
         shadows.push("SHADOWS");
         DirectPass {
@@ -62,11 +61,11 @@ impl DirectPass {
     ) {
         let light_count = scene.info().lights.len() as u32;
         let pcf = shadows.as_ref().map_or(0, |s| s.pcf);
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("deep-gbuffer.direct"),
-            contents: bytemuck::bytes_of(&DirectUniform { light_count, pcf, _pad: [0; 2] }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = gpu::uniform_buffer(
+            device,
+            "deep-gbuffer.direct",
+            bytemuck::bytes_of(&DirectUniform { light_count, pcf, _pad: [0; 2] }),
+        );
         let pipeline = &self.pipelines[usize::from(shadows.is_some())];
         let mut entries =
             vec![(0, frame), (1, &uniform), (2, gbuffer), (3, scene.light_buffer()), (4, radiance)];

@@ -1,7 +1,6 @@
 //! `wgsl/fill.wgsl`: fills u32 buffers with a value (empties visibility buffers).
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use crate::gpu;
 
@@ -33,11 +32,11 @@ impl FillPass {
         value: u32,
     ) {
         let count = (buffer.size() / 4) as u32;
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("deep-gbuffer.fill.params"),
-            contents: bytemuck::bytes_of(&FillParams { value, count, _pad: [0; 2] }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let params = gpu::uniform_buffer(
+            device,
+            "deep-gbuffer.fill.params",
+            bytemuck::bytes_of(&FillParams { value, count, _pad: [0; 2] }),
+        );
         let group = gpu::bind_group(
             device,
             "deep-gbuffer.fill",

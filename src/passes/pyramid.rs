@@ -1,7 +1,6 @@
 //! `wgsl/pyramid.wgsl`: the depth pyramid of each G-buffer layer.
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use crate::gpu;
 use crate::settings::Precision;
@@ -72,7 +71,7 @@ pub struct PyramidPass {
 impl PyramidPass {
     /// Builds the pipelines for `precision` G-buffers of `width` x `height`.
     pub fn new(device: &wgpu::Device, precision: Precision, width: u32, height: u32) -> Self {
-        let defines: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let defines = &precision.defines()[..];
         let layout = PyramidLayout::new(width, height);
         let uniforms = (0..layout.levels.len())
             .map(|i| {
@@ -87,11 +86,7 @@ impl PyramidPass {
                     dst_height: dst.height,
                     _pad: [0; 2],
                 };
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("deep-gbuffer.pyramid.level"),
-                    contents: bytemuck::bytes_of(&u),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                })
+                gpu::uniform_buffer(device, "deep-gbuffer.pyramid.level", bytemuck::bytes_of(&u))
             })
             .collect();
         PyramidPass {

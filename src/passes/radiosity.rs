@@ -74,7 +74,7 @@ pub struct RadiosityPass {
 impl RadiosityPass {
     /// Builds the pipelines for `precision` G-buffers.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let defines = &precision.defines()[..];
         RadiosityPass {
             feedback: gpu::compute_pipeline(device, "radiosity", "radiosity_feedback", defines),
             gather: gpu::compute_pipeline(device, "radiosity", "radiosity_gather", defines),

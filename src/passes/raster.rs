@@ -188,13 +188,9 @@ pub fn coverage_counts(
     scene: &SceneBuffers,
     frame: &crate::gpu::FrameUniform,
 ) -> crate::Result<Vec<u32>> {
-    use wgpu::util::DeviceExt;
     let pixels = u64::from(frame.width) * u64::from(frame.height);
-    let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("deep-gbuffer.raster.count.frame"),
-        contents: bytemuck::bytes_of(frame),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let uniform =
+        gpu::uniform_buffer(device, "deep-gbuffer.raster.count.frame", bytemuck::bytes_of(frame));
     let bins = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.bins",

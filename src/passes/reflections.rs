@@ -2,7 +2,6 @@
 //! only.
 
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 use crate::gpu;
 use crate::settings::Precision;
@@ -53,7 +52,7 @@ pub struct ReflectionsPass {
 impl ReflectionsPass {
     /// Builds the pipelines for `precision` G-buffers.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines: &[&str] = if precision == Precision::Packed { &["PACKED"] } else { &[] };
+        let defines = &precision.defines()[..];
         ReflectionsPass {
             classify: gpu::compute_pipeline(device, "reflections", "reflections_classify", defines),
             args: gpu::compute_pipeline(device, "reflections", "reflections_args", defines),
@@ -69,11 +68,8 @@ impl ReflectionsPass {
         uniform: &ReflectionsUniform,
         t: &ReflectionTargets<'_>,
     ) {
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("deep-gbuffer.reflections"),
-            contents: bytemuck::bytes_of(uniform),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let params =
+            gpu::uniform_buffer(device, "deep-gbuffer.reflections", bytemuck::bytes_of(uniform));
         let classify = gpu::bind_group(
             device,
             "deep-gbuffer.reflections.classify",

@@ -12,11 +12,9 @@ pub struct ResolvePass {
 impl ResolvePass {
     /// Builds the pipeline.
     pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines: &[&str] = match precision {
-            Precision::Full => &[],
-            Precision::Packed => &["PACKED"],
-        };
-        ResolvePass { pipeline: gpu::compute_pipeline(device, "resolve", "resolve", defines) }
+        ResolvePass {
+            pipeline: gpu::compute_pipeline(device, "resolve", "resolve", &precision.defines()),
+        }
     }
 
     /// Records the resolve of `vis` into `gbuffer` for a `width` x `height` image.

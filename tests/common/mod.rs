@@ -59,20 +59,19 @@ pub fn fixture(path: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(path)
 }
 
+/// A scene of one indexed mesh with one default material (double-sided or not).
+pub fn mesh(positions: &[Vec3], indices: &[u32], double_sided: bool) -> Scene {
+    let mut scene = Scene::default();
+    scene.materials.push(deep_gbuffer::scene::Material { double_sided, ..Default::default() });
+    let data =
+        deep_gbuffer::scene::MeshData { positions, normals: &[], uvs: &[], indices, material: 0 };
+    scene.push_mesh(data).expect("indices in range");
+    scene
+}
+
 /// A scene of the given triangles (one material, optionally double-sided).
 pub fn soup(triangles: &[[Vec3; 3]], double_sided: bool) -> Scene {
-    let mut scene = Scene::default();
     let positions: Vec<Vec3> = triangles.iter().flatten().copied().collect();
     let indices: Vec<u32> = (0..positions.len() as u32).collect();
-    scene.materials.push(deep_gbuffer::scene::Material { double_sided, ..Default::default() });
-    scene
-        .push_mesh(deep_gbuffer::scene::MeshData {
-            positions: &positions,
-            normals: &[],
-            uvs: &[],
-            indices: &indices,
-            material: 0,
-        })
-        .expect("valid soup");
-    scene
+    mesh(&positions, &indices, double_sided)
 }
