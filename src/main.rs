@@ -7,8 +7,8 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
-    AoSettings, AtomicPath, Camera, Effects, Error, Layer1Variant, Precision, Renderer, Result,
-    Scene, SceneBuffers, Settings, output,
+    AoSettings, AtomicPath, Boost, Camera, Effects, Error, Layer1Variant, Normalization, Precision,
+    RadiositySettings, Renderer, Result, Scene, SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -99,6 +99,24 @@ struct RenderArgs {
     /// Obscurance from layer 0 only (to compare with the two-layer estimator).
     #[arg(long)]
     ao_one_layer: bool,
+    /// Radiosity gather radius in scene units.
+    #[arg(long, default_value_t = RadiositySettings::default().radius)]
+    radiosity_radius: f32,
+    /// Radiosity taps per pixel.
+    #[arg(long, default_value_t = RadiositySettings::default().samples)]
+    radiosity_samples: u32,
+    /// How the radiosity gather normalises its taps (cosine conserves energy; paper is 2 pi / M).
+    #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
+    normalization: Normalization,
+    /// Colour boost of reflected light, UNSATURATED,SATURATED (1,1: none, energy conserving).
+    #[arg(long, default_value = "1,1", value_parser = parse_boost)]
+    boost: Boost,
+}
+
+fn parse_boost(s: &str) -> std::result::Result<Boost, String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("`{s}` is not UNSATURATED,SATURATED"))?;
+    let parse = |v: &str| v.trim().parse::<f32>().map_err(|e| format!("`{v}`: {e}"));
+    Ok(Boost { unsaturated: parse(a)?, saturated: parse(b)? })
 }
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -207,6 +225,13 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             samples: args.ao_samples,
             two_layers: !args.ao_one_layer,
             ..AoSettings::default()
+        },
+        radiosity: RadiositySettings {
+            radius: args.radiosity_radius,
+            samples: args.radiosity_samples,
+            normalization: args.normalization,
+            boost: args.boost,
+            ..RadiositySettings::default()
         },
         effects: Effects::parse(&args.effects)?,
         ..Settings::default()

@@ -143,6 +143,57 @@ pub struct RadiositySettings {
     /// Turn the tap spiral every frame, so the temporal filter averages different taps (less
     /// noise, a little flicker); off, a static camera converges to a fixed point.
     pub jitter: bool,
+    /// How the counted taps are normalised into irradiance.
+    pub normalization: Normalization,
+    /// Colour boost of the light a surface reflects into B; [`Boost::ONE`] conserves energy.
+    pub boost: Boost,
+}
+
+/// How the radiosity gather turns its counted taps into irradiance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+pub enum Normalization {
+    /// `E = pi * sum B(Y) (w.n_X) / sum (w.n_X)`: pi times the cosine-weighted mean radiance of
+    /// the counted taps. Surroundings of uniform radiance B give exactly `pi B`, the true
+    /// irradiance, whatever the taps' directions, so the estimate never exceeds what the
+    /// surroundings deliver (energy is conserved pixel by pixel).
+    #[default]
+    Cosine,
+    /// `E = 2 pi / M * sum B(Y) (w.n_X)` over the M counted taps, the paper's form. It assumes
+    /// the taps' directions are uniform over the hemisphere; screen-space taps are not, and a
+    /// pixel whose few counted taps all lie near its normal reads up to `2 pi B`, twice the
+    /// truth.
+    Paper,
+}
+
+/// The colour boost of the reflected light fed back into B:
+/// `boost(rho) = unsaturated + (saturated - unsaturated) * (max rho - min rho) / max rho`, so a
+/// grey surface gets `unsaturated`, a fully saturated one `saturated`. Both 1 (the default) is
+/// physically based and conserves energy; larger values exaggerate colour bleeding.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Boost {
+    /// Factor for grey albedo.
+    pub unsaturated: f32,
+    /// Factor for fully saturated albedo.
+    pub saturated: f32,
+}
+
+impl Boost {
+    /// No boost: `boost(rho) = 1`, energy conserving.
+    pub const ONE: Boost = Boost { unsaturated: 1.0, saturated: 1.0 };
+
+    /// The boost of albedo `rho` (linear rgb).
+    pub fn of(&self, rho: [f32; 3]) -> f32 {
+        let max = rho[0].max(rho[1]).max(rho[2]);
+        let min = rho[0].min(rho[1]).min(rho[2]);
+        let saturation = if max > 0.0 { (max - min) / max } else { 0.0 };
+        self.unsaturated + (self.saturated - self.unsaturated) * saturation
+    }
+}
+
+impl Default for Boost {
+    fn default() -> Self {
+        Boost::ONE
+    }
 }
 
 impl Default for RadiositySettings {
@@ -157,6 +208,8 @@ impl Default for RadiositySettings {
             normal_test: true,
             blur_radius: 3,
             jitter: true,
+            normalization: Normalization::Cosine,
+            boost: Boost::ONE,
         }
     }
 }
@@ -199,6 +252,14 @@ impl RadiositySettings {
                 "radiosity.history_tolerance",
                 format!("{} (must be finite and >= 0)", self.history_tolerance),
             ));
+        }
+        for (name, value) in [
+            ("radiosity.boost.unsaturated", self.boost.unsaturated),
+            ("radiosity.boost.saturated", self.boost.saturated),
+        ] {
+            if !(value.is_finite() && (0.0..=16.0).contains(&value)) {
+                return Err(Error::setting(name, format!("{value} (must be in [0, 16])")));
+            }
         }
         Ok(())
     }

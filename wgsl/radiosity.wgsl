@@ -1,14 +1,18 @@
 // Screen-space radiosity from both layers, with temporal multi-bounce.
 //
-// radiosity_feedback: B, the outgoing radiance the gather reads: direct + emission + damped
-//   indirect, B = D + Le + delta (1 - metallic) albedo / pi * E_prev, with E_prev the previous
-//   frame's filtered irradiance at this point (reprojected; 0 where there is none). Layer 1 has
-//   no irradiance of its own: B1 = D1 + Le1.
-// radiosity_gather: E(X) = 2 pi / M * sum B(Y) max(w.n_X, 0) over the N spiral taps
-//   (wgsl/shared/spiral.wgsl, turned every frame) of a world-space radius, Y from layer 0, or from layer 1 where the
-//   layer-0 point fails; a tap counts only with w.n_X > 0 and, unless the test is off,
-//   w.n_Y < 0 (Y faces X). M is the number of taps that count; the confidence M / N is kept in
-//   alpha.
+// radiosity_feedback: B, the outgoing radiance the gather reads: reflected light, boosted, plus
+//   emission, B = boost(rho) (D + delta (1 - metallic) rho / pi * E_prev) + Le, with E_prev the
+//   previous frame's filtered irradiance at this point (reprojected; 0 where there is none) and
+//   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
+//   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
+// radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
+//   world-space radius, Y from layer 0, or from layer 1 where the layer-0 point fails; a tap
+//   counts only with w.n_X > 0 and, unless the test is off, w.n_Y < 0 (Y faces X). With M the
+//   number of taps that count,
+//     cosine (default): E(X) = pi * sum B(Y) (w.n_X) / sum (w.n_X)
+//     paper:            E(X) = 2 pi / M * sum B(Y) (w.n_X)
+//   (src/settings.rs, Normalization, says why the default differs). The confidence M / N is kept
+//   in alpha.
 // radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha where the reprojected point lies within
 //   `tolerance` (view depth, scene units) of either layer of the previous frame; otherwise E.
 //   Non-finite values never enter the history.
@@ -32,6 +36,22 @@ struct Radiosity {
     history: u32,
     // Frames since the history began: turns the spiral every frame.
     turn: u32,
+    // 0: cosine-weighted mean, 1: the paper's 2 pi / M.
+    normalization: u32,
+    boost_unsaturated: f32,
+    boost_saturated: f32,
+    pad: u32,
+}
+
+// boost(rho): the colour boost of reflected light (1 with the default settings).
+fn boost(rho: vec3<f32>) -> f32 {
+    let hi = max(rho.r, max(rho.g, rho.b));
+    let lo = min(rho.r, min(rho.g, rho.b));
+    var saturation = 0.0;
+    if hi > 0.0 {
+        saturation = (hi - lo) / hi;
+    }
+    return params.boost_unsaturated + (params.boost_saturated - params.boost_unsaturated) * saturation;
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -102,12 +122,12 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     var out0 = vec3<f32>(0.0);
     if s0.depth > 0.0 {
         let e = history_at(gid.xy, s0).rgb;
-        out0 = direct0[p].rgb + s0.emissive + params.damping * (1.0 - s0.metallic) * s0.base_color / PI_R * e;
+        out0 = boost(s0.base_color) * (direct0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.base_color / PI_R * e) + s0.emissive;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
     if s1.depth > 0.0 {
-        out1 = direct1[p].rgb + s1.emissive;
+        out1 = boost(s1.base_color) * direct1[p].rgb + s1.emissive;
     }
     b0[p] = select(vec4<f32>(0.0), vec4<f32>(out0, 1.0), finite3(out0));
     b1[p] = select(vec4<f32>(0.0), vec4<f32>(out1, 1.0), finite3(out1));
@@ -130,6 +150,7 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
     let r_px = params.radius * pixels_per_unit(frame, s.depth);
     var sum = vec3<f32>(0.0);
+    var weight = 0.0;
     var m = 0u;
     for (var i = 0u; i < params.samples; i++) {
         let tap = spiral_tap_turned(gid.xy, i, params.samples, r_px, params.turn);
@@ -164,6 +185,7 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
                     radiance = b1[q].rgb;
                 }
                 sum += radiance * wn_x;
+                weight += wn_x;
                 m += 1u;
                 break;
             }
@@ -171,7 +193,11 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     var e = vec3<f32>(0.0);
     if m > 0u {
-        e = 2.0 * PI_R / f32(m) * sum;
+        if params.normalization == 0u {
+            e = PI_R * sum / weight;
+        } else {
+            e = 2.0 * PI_R / f32(m) * sum;
+        }
     }
     raw[p] = vec4<f32>(e, f32(m) / f32(params.samples));
 }

@@ -10,13 +10,28 @@ use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
 use crate::gbuffer::GSample;
 use crate::gpu::FrameUniform;
 use crate::passes::radiosity::RadiosityUniform;
+use crate::settings::Boost;
 
-/// B of one layer without history: direct radiance plus emission where there is a surface.
-pub fn feedback_without_history(layer: &[GSample], direct: &[Vec3]) -> Vec<Vec3> {
+/// boost(rho) of `wgsl/radiosity.wgsl`.
+pub fn boost(u: &RadiosityUniform, rho: Vec3) -> f32 {
+    Boost { unsaturated: u.boost_unsaturated, saturated: u.boost_saturated }.of(rho.to_array())
+}
+
+/// B of one layer without history: boosted direct radiance plus emission where there is a
+/// surface.
+pub fn feedback_without_history(
+    u: &RadiosityUniform,
+    layer: &[GSample],
+    direct: &[Vec3],
+) -> Vec<Vec3> {
     layer
         .iter()
         .zip(direct)
-        .map(|(s, d)| if s.depth > 0.0 { *d + s.emissive } else { Vec3::ZERO })
+        .map(
+            |(s, d)| {
+                if s.depth > 0.0 { boost(u, s.base_color) * *d + s.emissive } else { Vec3::ZERO }
+            },
+        )
         .collect()
 }
 
@@ -39,6 +54,7 @@ pub fn gather(
             let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
             let r_px = u.radius * pixels_per_unit(f, s.depth);
             let mut sum = Vec3::ZERO;
+            let mut weight = 0.0f32;
             let mut m = 0u32;
             for i in 0..u.samples {
                 let (tx, ty) = spiral_tap_turned(x, y, i, u.samples, r_px, u.turn);
@@ -63,12 +79,17 @@ pub fn gather(
                         w.dot(mat_mul(&f.view, yl.normal.extend(0.0).to_array()).xyz().normalize());
                     if wn_x > 0.0 && (u.normal_test == 0 || wn_y < 0.0) {
                         sum += b[layer][q] * wn_x;
+                        weight += wn_x;
                         m += 1;
                         break;
                     }
                 }
             }
-            let e = if m > 0 { 2.0 * PI / m as f32 * sum } else { Vec3::ZERO };
+            let e = match (m, u.normalization) {
+                (0, _) => Vec3::ZERO,
+                (_, 0) => PI * sum / weight,
+                _ => 2.0 * PI / m as f32 * sum,
+            };
             out[p] = e.extend(m as f32 / u.samples as f32);
         }
     }

@@ -3,7 +3,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu;
-use crate::settings::{Precision, RadiositySettings};
+use crate::settings::{Normalization, Precision, RadiositySettings};
 
 /// Mirrors `struct Radiosity` in `wgsl/radiosity.wgsl`.
 #[repr(C)]
@@ -25,6 +25,14 @@ pub struct RadiosityUniform {
     pub history: u32,
     /// Frame count since the history began (turns the spiral).
     pub turn: u32,
+    /// 0: [`Normalization::Cosine`], 1: [`Normalization::Paper`].
+    pub normalization: u32,
+    /// [`Boost::unsaturated`](crate::settings::Boost).
+    pub boost_unsaturated: f32,
+    /// [`Boost::saturated`](crate::settings::Boost).
+    pub boost_saturated: f32,
+    /// Padding to 16 bytes.
+    pub pad: u32,
 }
 
 impl RadiosityUniform {
@@ -40,6 +48,13 @@ impl RadiosityUniform {
             normal_test: u32::from(s.normal_test),
             history: u32::from(history),
             turn,
+            normalization: match s.normalization {
+                Normalization::Cosine => 0,
+                Normalization::Paper => 1,
+            },
+            boost_unsaturated: s.boost.unsaturated,
+            boost_saturated: s.boost.saturated,
+            pad: 0,
         }
     }
 }
