@@ -78,6 +78,14 @@ pub enum Error {
     /// Reading a buffer back from the GPU failed.
     #[error("reading back `{0}` from the GPU failed")]
     Readback(String),
+    /// An input image (an environment map) could not be read or is unusable.
+    #[error("{path}: {message}")]
+    ImageRead {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// Encoding an output image failed.
     #[error("{path}: could not write image: {message}")]
     ImageWrite {

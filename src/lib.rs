@@ -32,6 +32,7 @@
 //! ```
 
 pub mod cpu;
+pub mod environment;
 mod error;
 pub mod gbuffer;
 pub mod gpu;
@@ -42,6 +43,7 @@ mod renderer;
 pub mod scene;
 pub mod settings;
 
+pub use environment::Environment;
 pub use error::{Error, Result};
 pub use gbuffer::{GBufferLayer, GSample};
 pub use plan::{Effects, Plan};

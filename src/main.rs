@@ -7,8 +7,9 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
-    AoSettings, AtomicPath, Boost, Camera, Effects, Error, Layer1Variant, Normalization, Precision,
-    RadiositySettings, Renderer, Result, Scene, SceneBuffers, Settings, output,
+    AoSettings, AtomicPath, Boost, Camera, Effects, Environment, Error, Layer1Variant,
+    Normalization, Precision, RadiositySettings, Renderer, Result, Scene, SceneBuffers, Settings,
+    output,
 };
 use glam::Vec3;
 
@@ -108,6 +109,10 @@ struct RenderArgs {
     /// How the radiosity gather normalises its taps (cosine conserves energy; paper is 2 pi / M).
     #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
     normalization: Normalization,
+    /// Equirectangular EXR environment that reflection rays see when they leave the screen
+    /// (default: the scene's constant ambient sky).
+    #[arg(long)]
+    environment: Option<std::path::PathBuf>,
     /// Colour boost of reflected light, UNSATURATED,SATURATED (1,1: none, energy conserving).
     #[arg(long, default_value = "1,1", value_parser = parse_boost)]
     boost: Boost,
@@ -255,6 +260,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;
+    if let Some(path) = &args.environment {
+        renderer.set_environment(&gpu.device, Some(&Environment::load_exr(path)?))?;
+    }
     if args.plan {
         println!("{}", renderer.plan(&buffers));
     }

@@ -1,6 +1,7 @@
 //! [`Renderer`]: the deep G-buffer stage, recorded into a caller's command encoder.
 
 use crate::SceneBuffers;
+use crate::environment::Environment;
 use crate::gbuffer::{self, GBufferLayer};
 use crate::gpu::frame::CameraMatrices;
 use crate::gpu::{self, FrameUniform, PassTiming, Timestamps};
@@ -62,6 +63,8 @@ pub struct Renderer {
     reflections: Option<ReflectionsStage>,
     present: Option<PresentPass>,
     plan: Option<Plan>,
+    /// The environment map (texels, width, height) missed reflection rays see.
+    environment: Option<(wgpu::Buffer, u32, u32)>,
 }
 
 /// Reflections: the kernels, the tile list, its indirect arguments and the reflected radiance.
@@ -70,6 +73,8 @@ struct ReflectionsStage {
     tiles: wgpu::Buffer,
     args: wgpu::Buffer,
     output: wgpu::Buffer,
+    /// Bound in place of an environment map when there is none.
+    no_environment: wgpu::Buffer,
     tiles_x: u32,
     tiles_y: u32,
 }
@@ -96,6 +101,12 @@ impl ReflectionsStage {
                 device,
                 "deep-gbuffer.reflections.output",
                 pixels * 16,
+                wgpu::BufferUsages::empty(),
+            ),
+            no_environment: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.reflections.no_environment",
+                16,
                 wgpu::BufferUsages::empty(),
             ),
             tiles_x,
@@ -439,6 +450,7 @@ impl Renderer {
             reflections: None,
             present: None,
             plan: None,
+            environment: None,
             settings,
         })
     }
@@ -446,6 +458,34 @@ impl Renderer {
     /// The settings.
     pub fn settings(&self) -> &Settings {
         &self.settings
+    }
+
+    /// Sets the equirectangular environment that reflection rays see when they leave the screen
+    /// (`None`: the scene's constant ambient sky, the default). The map is uploaded once and
+    /// kept until the next call.
+    pub fn set_environment(
+        &mut self,
+        device: &wgpu::Device,
+        environment: Option<&Environment>,
+    ) -> Result<()> {
+        self.environment = match environment {
+            None => None,
+            Some(env) => {
+                let bytes: &[u8] = bytemuck::cast_slice(env.texels());
+                let limit = device.limits().max_storage_buffer_binding_size;
+                if bytes.len() as u64 > limit {
+                    return Err(Error::ExceedsLimit {
+                        what: format!("a {}x{} environment map", env.width(), env.height()),
+                        needed: bytes.len() as u64,
+                        limit,
+                    });
+                }
+                let buffer =
+                    gpu::storage_buffer_init(device, "deep-gbuffer.reflections.environment", bytes);
+                Some((buffer, env.width(), env.height()))
+            }
+        };
+        Ok(())
     }
 
     /// `"int64"` (one 64-bit atomicMin per fragment) or `"int32"` (depth pass, then id pass).
@@ -840,19 +880,33 @@ impl Renderer {
             encoder.clear_buffer(&r.tiles, 0, None);
             encoder.clear_buffer(&r.output, 0, None);
             let mut pass = begin(encoder, "reflections");
+            let (environment, env_width, env_height) = match &self.environment {
+                Some((buffer, w, h)) => (buffer, *w, *h),
+                None => (&r.no_environment, 0, 0),
+            };
+            // The radiosity pass's B is the fuller outgoing radiance (it adds the previous
+            // frame's indirect light to direct and emission).
+            let radiance = match radiosity_stage {
+                Some(rad) => [&rad.b[0], &rad.b[1]],
+                None => [&shading.radiance, &shading.radiance1],
+            };
             let uniform = ReflectionsUniform {
                 sky: scene.info().ambient.to_array(),
                 max_distance: s.reflections.max_distance,
                 thickness: s.reflections.thickness,
                 tiles_x: r.tiles_x,
                 tiles_y: r.tiles_y,
-                _pad: 0,
+                env_width,
+                env_height,
+                with_emission: u32::from(radiosity_stage.is_some()),
+                _pad: [0; 2],
             };
             let targets = ReflectionTargets {
                 frame: &self.frame,
                 gbuffer0: &self.gbuffer[0],
                 vis1: &self.vis1,
-                radiance: [&shading.radiance, &shading.radiance1],
+                radiance,
+                environment,
                 tiles: &r.tiles,
                 args: &r.args,
                 output: &r.output,

@@ -7,7 +7,7 @@ use common::{gpu, render};
 use deep_gbuffer::cpu::reflections as cpu;
 use deep_gbuffer::passes::reflections::ReflectionsUniform;
 use deep_gbuffer::scene::{Material, MeshData};
-use deep_gbuffer::{Camera, Scene, Settings};
+use deep_gbuffer::{Camera, Environment, Error, Renderer, Scene, SceneBuffers, Settings};
 use glam::{Vec3, Vec4};
 
 /// A step's pixel comes from a projection the GPU rounds slightly differently (fused
@@ -35,19 +35,23 @@ fn reflective_spheres_match_cpu_reference() {
     assert!(r.renderer.passes().iter().any(|p| p == "reflections"));
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
-    let radiance0 =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
-    let radiance1 =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer().unwrap()).unwrap();
+    // The march reads the radiosity pass's B (direct + emission + indirect) when it runs.
+    let [b0, b1, ..] = r.renderer.radiosity_buffers().expect("the spheres are lit");
+    let [radiance0, radiance1] =
+        [b0, b1].map(|b| read4(&r.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
     let uniform = ReflectionsUniform {
         sky: scene.ambient.to_array(),
         max_distance: uniform_settings.max_distance,
         thickness: uniform_settings.thickness,
         tiles_x: 10,
         tiles_y: 8,
-        _pad: 0,
+        env_width: 0,
+        env_height: 0,
+        with_emission: 1,
+        _pad: [0; 2],
     };
-    let expected = cpu::reflections(&r.frame, &uniform, &layer0, &r.vis1, [&radiance0, &radiance1]);
+    let expected =
+        cpu::reflections(&r.frame, &uniform, &layer0, &r.vis1, [&radiance0, &radiance1], None);
     let actual = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
     let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
     assert!(reflective > 50, "the view shows reflective spheres ({reflective})");
@@ -157,7 +161,8 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
                 q.x.abs() > 1.3 || q.y > 1.3
             };
             let red = refl[p].x > 0.5 && refl[p].z < 0.2;
-            let sky = refl[p].x < 0.1;
+            // The sky is blue; a black pixel would be the mirror hitting itself.
+            let sky = refl[p].x < 0.1 && refl[p].z > 0.4;
             if expected_hit || clear_miss {
                 checked += 1;
                 if (expected_hit && red) || (clear_miss && sky) {
@@ -183,4 +188,121 @@ fn nothing_reflective_runs_no_reflection_pass() {
     );
     assert!(!r.renderer.passes().iter().any(|p| p == "reflections"));
     assert!(r.renderer.reflections_buffer().is_none());
+}
+
+fn gradient() -> Environment {
+    Environment::load_exr(&common::fixture("environment/gradient.exr")).unwrap()
+}
+
+/// The fixture holds r = (x + 0.5) / 64, g = (y + 0.5) / 32, b = 0.25 (fixtures/README.md); the
+/// mapping puts straight up on row 0 and -z on the middle column.
+#[test]
+fn the_environment_map_loads_and_maps_directions() {
+    let env = gradient();
+    assert_eq!((env.width(), env.height()), (64, 32));
+    for (i, t) in env.texels().iter().enumerate() {
+        let (x, y) = ((i % 64) as f32, (i / 64) as f32);
+        assert_eq!(t[..3], [(x + 0.5) / 64.0, (y + 0.5) / 32.0, 0.25], "texel {i}");
+    }
+    let up = env.sample(Vec3::Y);
+    assert!((up.y - 0.5 / 32.0).abs() < 1e-6, "up reads row 0: {up}");
+    let forward = env.sample(Vec3::NEG_Z);
+    assert!((forward.x - 0.5).abs() < 1e-6 && (forward.y - 0.5).abs() < 1e-6, "{forward}");
+    let right = env.sample(Vec3::X);
+    assert!((right.x - 0.75).abs() < 1e-6, "+x is a quarter turn from -z: {right}");
+}
+
+#[test]
+fn bad_environment_maps_get_typed_errors() {
+    match Environment::load_exr(&common::fixture("cornell/CornellBox-Original.obj")) {
+        Err(Error::ImageRead { path, .. }) => assert!(path.ends_with("CornellBox-Original.obj")),
+        other => panic!("not an EXR: {other:?}"),
+    }
+    match Environment::load_exr(&common::fixture("environment/missing.exr")) {
+        Err(Error::Io { .. }) => {}
+        other => panic!("a missing file: {other:?}"),
+    }
+    for rgb in [vec![[f32::NAN, 0.0, 0.0]], vec![[-1.0, 0.0, 0.0]], vec![]] {
+        assert!(matches!(
+            Environment::new(1, 1, rgb),
+            Err(Error::InvalidSetting { name: "environment", .. })
+        ));
+    }
+    assert!(Environment::new(0, 1, vec![]).is_err());
+    assert!(Environment::new(Environment::MAX_SIDE + 1, 1, vec![[0.0; 3]; 8193]).is_err());
+}
+
+/// A mirror floor alone under an environment map: every reflected ray leaves the screen, and each
+/// floor pixel shows the map along the floor's closed-form mirrored view ray.
+#[test]
+fn missed_rays_see_the_environment_map() {
+    let g = gpu();
+    let mut scene = Scene::default();
+    scene.materials.push(Material {
+        name: "mirror".into(),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        reflectivity: 1.0,
+        roughness: 0.0,
+        ..Default::default()
+    });
+    let floor = [
+        Vec3::new(-4.0, 0.0, -4.0),
+        Vec3::new(-4.0, 0.0, 4.0),
+        Vec3::new(4.0, 0.0, 4.0),
+        Vec3::new(4.0, 0.0, -4.0),
+    ];
+    let mesh = MeshData {
+        positions: &floor,
+        normals: &[],
+        uvs: &[],
+        indices: &[0, 1, 2, 0, 2, 3],
+        material: 0,
+    };
+    scene.push_mesh(mesh).unwrap();
+    scene.ambient = Vec3::splat(0.1);
+    let camera =
+        Camera::perspective(Vec3::new(0.3, 1.2, 2.0), Vec3::new(-0.2, 0.0, -1.0), 60.0, 0.1);
+    let (w, h) = (48u32, 32u32);
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let mut renderer = Renderer::new(
+        &g.device,
+        &g.queue,
+        Settings { timings: false, ..Settings::with_size(w, h) },
+    )
+    .unwrap();
+    let env = gradient();
+    renderer.set_environment(&g.device, Some(&env)).unwrap();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+    let refl = read4(&renderer, renderer.reflections_buffer().unwrap());
+    let frame = renderer.frame_uniform().unwrap();
+    let inv_view = camera.view().inverse();
+    let mut checked = 0;
+    for (p, s) in layer0.iter().enumerate() {
+        if s.depth.is_nan() || s.depth <= 0.0 {
+            continue;
+        }
+        let px = glam::Vec2::new((p as u32 % w) as f32 + 0.5, (p as u32 / w) as f32 + 0.5);
+        let point =
+            inv_view.transform_point3(deep_gbuffer::cpu::frame::view_position(frame, px, s.depth));
+        let d = (point - camera.eye).normalize();
+        let expected = env.sample(Vec3::new(d.x, -d.y, d.z));
+        // Directions through the f32 G-buffer round-trip differ in the last bits; the map is
+        // smooth (a texel step changes a channel by 1/64), so colours agree far closer than this.
+        assert!(
+            (refl[p].truncate() - expected).abs().max_element() < 2e-3,
+            "pixel {p}: {} vs {expected}",
+            refl[p]
+        );
+        assert_eq!(refl[p].w, 0.0, "a missed ray has no confidence");
+        checked += 1;
+    }
+    assert!(checked > (w * h / 2) as usize, "the floor fills the view ({checked})");
+
+    // Back to the constant sky.
+    renderer.set_environment(&g.device, None).unwrap();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let refl = read4(&renderer, renderer.reflections_buffer().unwrap());
+    let sky = refl.iter().zip(&layer0).filter(|(_, s)| s.depth > 0.0);
+    assert!(sky.clone().all(|(v, _)| (v.truncate() - scene.ambient).abs().max_element() < 1e-6));
 }

@@ -6,10 +6,14 @@
 // reflections_march: one 8x8 workgroup per listed tile. For a reflective pixel the mirror
 //   direction of the view ray is marched in view space in at most STEPS equal steps up to
 //   `max_distance`; a step hits where the ray is behind a layer's surface by no more than
-//   `thickness` (layer 0 first, then layer 1), and returns that pixel's radiance (direct +
-//   emission of the layer it hit). A ray that leaves the screen or the distance sees the
-//   environment (the constant sky). Hits fade out near the screen edges; the confidence (alpha)
-//   is 1 for a hit far from the edges, 0 for the environment. Output: reflectivity * colour.
+//   `thickness` (layer 0 first, its depth taken on the plane of the pixel's point and normal at
+//   the step's exact sub-pixel position; then layer 1, at the pixel's depth), and returns that pixel's outgoing radiance: the
+//   radiosity pass's B (direct + emission + the previous frame's indirect light) when it runs,
+//   else direct + emission (layer 0) or direct (layer 1). A ray that leaves the screen or the
+//   distance sees the environment: the equirectangular map (src/environment.rs gives the
+//   mapping) when one is set, else the constant sky. Hits fade out near the screen edges; the
+//   confidence (alpha) is 1 for a hit far from the edges, 0 for the environment. Output:
+//   reflectivity * colour.
 // src/cpu/reflections.rs is the same on the CPU.
 // defines: PACKED
 
@@ -27,7 +31,13 @@ struct Reflections {
     thickness: f32,
     tiles_x: u32,
     tiles_y: u32,
-    _pad: u32,
+    // Environment map size (0: the constant sky).
+    env_width: u32,
+    env_height: u32,
+    // 1: radiance0 already holds emission (the radiosity pass's B).
+    with_emission: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -40,6 +50,36 @@ struct Reflections {
 @group(0) @binding(6) var<storage, read_write> tiles: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 @group(0) @binding(8) var<storage, read_write> reflections: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> environment_map: array<vec4<f32>>;
+
+const TAU_R: f32 = 6.28318531;
+const PI_R: f32 = 3.14159265;
+
+fn env_texel(x: i32, y: i32) -> vec3<f32> {
+    return environment_map[u32(y) * params.env_width + u32(x)].rgb;
+}
+
+// The environment's radiance along world-space unit direction d (bilinear, u wraps).
+fn environment(d: vec3<f32>) -> vec3<f32> {
+    if params.env_width == 0u {
+        return params.sky;
+    }
+    let w = i32(params.env_width);
+    let h = i32(params.env_height);
+    let u = 0.5 + atan2(d.x, -d.z) / TAU_R;
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI_R;
+    let x = u * f32(w) - 0.5;
+    let y = clamp(v * f32(h) - 0.5, 0.0, f32(h - 1));
+    let fx = x - floor(x);
+    let fy = y - floor(y);
+    let x0 = ((i32(floor(x)) % w) + w) % w;
+    let x1 = (x0 + 1) % w;
+    let y0 = i32(floor(y));
+    let y1 = min(y0 + 1, h - 1);
+    let top = mix(env_texel(x0, y0), env_texel(x1, y0), fx);
+    let bottom = mix(env_texel(x0, y1), env_texel(x1, y1), fx);
+    return mix(top, bottom, fy);
+}
 
 @compute @workgroup_size(64)
 fn reflections_classify(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
@@ -83,6 +123,27 @@ fn project(q: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(px, -q.z);
 }
 
+// The view depth of pixel q's layer-0 surface where the view ray through the sub-pixel position
+// xy meets it: the plane of the pixel's point and normal, not the depth at the pixel centre, so
+// a ray leaving a plane never hits the plane's own neighbouring pixels. Depth 0: no surface.
+fn surface_depth(q: u32, xy: vec2<f32>) -> f32 {
+    let s = sample_at(q);
+    if !(s.depth > 0.0) {
+        return 0.0;
+    }
+    let centre = vec2<f32>(f32(q % frame.width), f32(q / frame.width)) + 0.5;
+    let c = view_position(frame, centre, s.depth);
+    let n = mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz;
+    // The ray through xy is a + t b, t its view depth.
+    let a = view_position(frame, xy, 0.0);
+    let b = view_position(frame, xy, 1.0) - a;
+    let facing = dot(n, b);
+    if abs(facing) < 1e-4 * length(n) * length(b) {
+        return s.depth;
+    }
+    return dot(n, c - a) / facing;
+}
+
 fn trace(pixel: vec2<u32>) -> vec4<f32> {
     let s = sample_at(pixel.y * frame.width + pixel.x);
     if !(s.depth > 0.0) || !(s.reflectivity > 0.0) {
@@ -96,7 +157,8 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     }
     let r = reflect(v, n);
     let step = params.max_distance / f32(STEPS);
-    var colour = params.sky;
+    let sky = environment(normalize(mat_mul(frame.inv_view, vec4<f32>(r, 0.0)).xyz));
+    var colour = sky;
     var confidence = 0.0;
     for (var i = 1u; i <= STEPS; i++) {
         let hit = project(p + r * (step * f32(i)));
@@ -104,7 +166,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
             break;
         }
         let q = u32(hit.y) * frame.width + u32(hit.x);
-        let d0 = sample_at(q).depth;
+        let d0 = surface_depth(q, hit.xy);
         var layer = 2u;
         if d0 > 0.0 && hit.z >= d0 && hit.z - d0 <= params.thickness {
             layer = 0u;
@@ -116,14 +178,17 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
             }
         }
         if layer < 2u {
-            var seen = radiance0[q].rgb + sample_at(q).emissive;
+            var seen = radiance0[q].rgb;
+            if params.with_emission == 0u {
+                seen += sample_at(q).emissive;
+            }
             if layer == 1u {
                 seen = radiance1[q].rgb;
             }
             let uv = hit.xy / vec2<f32>(f32(frame.width), f32(frame.height));
             let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
             confidence = clamp(edge / EDGE_FADE, 0.0, 1.0);
-            colour = mix(params.sky, seen, confidence);
+            colour = mix(sky, seen, confidence);
             break;
         }
     }

@@ -3,6 +3,7 @@
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::environment::Environment;
 use crate::gbuffer::{GSample, VIS_EMPTY};
 use crate::gpu::FrameUniform;
 use crate::passes::reflections::ReflectionsUniform;
@@ -25,15 +26,34 @@ fn project(f: &FrameUniform, q: Vec3) -> Option<(Vec2, f32)> {
     Some((px, -q.z))
 }
 
+/// As `surface_depth`: pixel q's layer-0 plane depth along the view ray through `xy`.
+fn surface_depth(f: &FrameUniform, layer0: &[GSample], q: usize, xy: Vec2) -> f32 {
+    let s = &layer0[q];
+    if s.depth.is_nan() || s.depth <= 0.0 {
+        return 0.0;
+    }
+    let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32) + 0.5;
+    let c = view_position(f, centre, s.depth);
+    let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz();
+    let a = view_position(f, xy, 0.0);
+    let b = view_position(f, xy, 1.0) - a;
+    let facing = n.dot(b);
+    if facing.abs() < 1e-4 * n.length() * b.length() {
+        return s.depth;
+    }
+    n.dot(c - a) / facing
+}
+
 /// Reflected radiance (rgb, scaled by reflectivity) and confidence (w) of every pixel.
+/// `environment` is the map the uniform's `env_width` refers to (`None`: the constant sky).
 pub fn reflections(
     f: &FrameUniform,
     u: &ReflectionsUniform,
     layer0: &[GSample],
     vis1: &[u64],
     radiance: [&[Vec3]; 2],
+    environment: Option<&Environment>,
 ) -> Vec<Vec4> {
-    let sky = Vec3::from(u.sky);
     let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
@@ -51,11 +71,17 @@ pub fn reflections(
             let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
             let r = v - 2.0 * n.dot(v) * n;
             let step = u.max_distance / STEPS as f32;
+            let sky = match environment {
+                Some(env) if u.env_width != 0 => {
+                    env.sample(mat_mul(&f.inv_view, r.extend(0.0).to_array()).xyz().normalize())
+                }
+                _ => Vec3::from(u.sky),
+            };
             let (mut colour, mut confidence) = (sky, 0.0);
             for i in 1..=STEPS {
                 let Some((px, z)) = project(f, p + r * (step * i as f32)) else { break };
                 let q = (px.y as u32 * f.width + px.x as u32) as usize;
-                let d0 = layer0[q].depth;
+                let d0 = surface_depth(f, layer0, q, px);
                 let layer = if d0 > 0.0 && z >= d0 && z - d0 <= u.thickness {
                     Some(0)
                 } else {
@@ -65,7 +91,9 @@ pub fn reflections(
                 };
                 if let Some(layer) = layer {
                     let seen = if layer == 0 {
-                        radiance[0][q] + layer0[q].emissive
+                        let emission =
+                            if u.with_emission == 0 { layer0[q].emissive } else { Vec3::ZERO };
+                        radiance[0][q] + emission
                     } else {
                         radiance[1][q]
                     };

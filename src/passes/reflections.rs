@@ -20,8 +20,14 @@ pub struct ReflectionsUniform {
     pub tiles_x: u32,
     /// 8x8 tiles down.
     pub tiles_y: u32,
+    /// Environment map width in texels (0: the constant `sky`).
+    pub env_width: u32,
+    /// Environment map height in texels.
+    pub env_height: u32,
+    /// 1: the layer-0 radiance already includes emission (the radiosity pass's B).
+    pub with_emission: u32,
     /// Padding.
-    pub _pad: u32,
+    pub _pad: [u32; 2],
 }
 
 /// The inputs and outputs of the reflection passes.
@@ -32,8 +38,10 @@ pub struct ReflectionTargets<'a> {
     pub gbuffer0: &'a wgpu::Buffer,
     /// Layer-1 visibility buffer (its depth words).
     pub vis1: &'a wgpu::Buffer,
-    /// Direct radiance of both layers.
+    /// Outgoing radiance of both layers (B when radiosity runs, else direct).
     pub radiance: [&'a wgpu::Buffer; 2],
+    /// The environment map's texels (any buffer of at least 16 bytes without one).
+    pub environment: &'a wgpu::Buffer,
     /// Tile list (count, then tile indices).
     pub tiles: &'a wgpu::Buffer,
     /// Indirect arguments (INDIRECT usage).
@@ -98,6 +106,7 @@ impl ReflectionsPass {
             (5, t.radiance[1]),
             (6, t.tiles),
             (8, t.output),
+            (9, t.environment),
         ];
         let march = gpu::bind_group(device, "deep-gbuffer.reflections", &self.march, &entries);
         pass.set_pipeline(&self.march);
