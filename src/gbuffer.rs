@@ -108,17 +108,7 @@ impl GBufferLayer {
             Precision::Full => {
                 let f: &[f32] = bytemuck::cast_slice(&bytes[..n * 64]);
                 f.chunks_exact(16)
-                    .map(|w| GSample {
-                        depth: w[0],
-                        normal: Vec3::new(w[1], w[2], w[3]),
-                        base_color: Vec3::new(w[4], w[5], w[6]),
-                        roughness: w[7],
-                        emissive: Vec3::new(w[8], w[9], w[10]),
-                        metallic: w[11],
-                        motion: Vec2::new(w[12], w[13]),
-                        reflectivity: w[14],
-                        material: w[15] as u32,
-                    })
+                    .map(|w| GSample::from_words(w.try_into().expect("16 words")))
                     .collect()
             }
             Precision::Packed => {
@@ -153,5 +143,155 @@ impl GBufferLayer {
     /// The sample at pixel (x, y).
     pub fn at(&self, x: u32, y: u32) -> &GSample {
         &self.samples[(y * self.width + x) as usize]
+    }
+}
+
+/// The channels of a G-buffer layer in an EXR file, in the order of the full encoding's words.
+pub const EXR_CHANNELS: [&str; 16] = [
+    "depth",
+    "normal.X",
+    "normal.Y",
+    "normal.Z",
+    "albedo.R",
+    "albedo.G",
+    "albedo.B",
+    "roughness",
+    "emission.R",
+    "emission.G",
+    "emission.B",
+    "metallic",
+    "motion.X",
+    "motion.Y",
+    "reflectivity",
+    "material",
+];
+
+impl GSample {
+    /// The sixteen words of the full encoding (`Precision::Full`), in [`EXR_CHANNELS`] order.
+    pub fn words(&self) -> [f32; 16] {
+        let (n, c, e) = (self.normal, self.base_color, self.emissive);
+        [
+            self.depth,
+            n.x,
+            n.y,
+            n.z,
+            c.x,
+            c.y,
+            c.z,
+            self.roughness,
+            e.x,
+            e.y,
+            e.z,
+            self.metallic,
+            self.motion.x,
+            self.motion.y,
+            self.reflectivity,
+            self.material as f32,
+        ]
+    }
+
+    fn from_words(w: &[f32; 16]) -> GSample {
+        GSample {
+            depth: w[0],
+            normal: Vec3::new(w[1], w[2], w[3]),
+            base_color: Vec3::new(w[4], w[5], w[6]),
+            roughness: w[7],
+            emissive: Vec3::new(w[8], w[9], w[10]),
+            metallic: w[11],
+            motion: Vec2::new(w[12], w[13]),
+            reflectivity: w[14],
+            material: w[15] as u32,
+        }
+    }
+}
+
+impl GBufferLayer {
+    /// The layer in the full encoding, as `wgsl/shared/gbuffer.wgsl` reads it (64 bytes a pixel).
+    pub fn encode_full(&self) -> Vec<f32> {
+        self.samples.iter().flat_map(GSample::words).collect()
+    }
+
+    /// Writes `layers` into one EXR file, one EXR layer (`layer0`, `layer1`) each, every
+    /// attribute a 32-bit float channel named as in [`EXR_CHANNELS`] (lossless).
+    pub fn write_exr(path: &std::path::Path, layers: &[GBufferLayer]) -> crate::Result<()> {
+        use exr::prelude::*;
+        let write_error =
+            |e: Error| crate::Error::ImageWrite { path: path.into(), message: e.to_string() };
+        let exr_layers: Vec<_> = layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let channels = EXR_CHANNELS
+                    .iter()
+                    .enumerate()
+                    .map(|(c, name)| {
+                        let values = l.samples.iter().map(|s| s.words()[c]).collect();
+                        AnyChannel::new(*name, FlatSamples::F32(values))
+                    })
+                    .collect();
+                Layer::new(
+                    (l.width as usize, l.height as usize),
+                    LayerAttributes::named(format!("layer{i}").as_str()),
+                    Encoding::SMALL_LOSSLESS,
+                    AnyChannels::sort(channels),
+                )
+            })
+            .collect();
+        Image::from_layers(
+            ImageAttributes::new(IntegerBounds::from_dimensions(
+                exr_layers.first().map_or((0, 0), |l| l.size.into()),
+            )),
+            exr_layers,
+        )
+        .write()
+        .to_file(path)
+        .map_err(write_error)
+    }
+
+    /// Reads the layers [`write_exr`](GBufferLayer::write_exr) wrote, in their order. A missing
+    /// channel, a channel that is not 32-bit float or layers of different sizes are errors that
+    /// name the file.
+    pub fn read_exr(path: &std::path::Path) -> crate::Result<Vec<GBufferLayer>> {
+        use exr::prelude::*;
+        let bad = |message: String| crate::Error::ImageRead { path: path.into(), message };
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .all_layers()
+            .all_attributes()
+            .from_file(path)
+            .map_err(|e| match e {
+                Error::Io(source) => crate::Error::io(path, source),
+                e => bad(e.to_string()),
+            })?;
+        let mut layers = Vec::new();
+        for (i, layer) in image.layer_data.iter().enumerate() {
+            let (w, h) = (layer.size.0, layer.size.1);
+            let mut columns = Vec::with_capacity(16);
+            for name in EXR_CHANNELS {
+                let channel = layer
+                    .channel_data
+                    .list
+                    .iter()
+                    .find(|c| c.name.to_string() == name)
+                    .ok_or_else(|| bad(format!("layer {i} has no channel `{name}`")))?;
+                match &channel.sample_data {
+                    FlatSamples::F32(v) if v.len() == w * h => columns.push(v),
+                    _ => return Err(bad(format!("layer {i}: channel `{name}` is not f32"))),
+                }
+            }
+            let samples = (0..w * h)
+                .map(|p| GSample::from_words(&std::array::from_fn(|c| columns[c][p])))
+                .collect();
+            let (width, height) = (w as u32, h as u32);
+            layers.push(GBufferLayer { width, height, samples });
+        }
+        if layers.is_empty()
+            || layers.iter().any(|l| (l.width, l.height) != (layers[0].width, layers[0].height))
+        {
+            return Err(bad("expected one or more G-buffer layers of one size".into()));
+        }
+        Ok(layers)
     }
 }

@@ -65,9 +65,12 @@ pub fn depth_display(layers: &[&GBufferLayer]) -> Vec<Vec<Vec3>> {
         .collect()
 }
 
-/// Writes `layer{i}_depth`, `layer{i}_normal` and `layer{i}_basecolor` as PNG and EXR into `dir`.
+/// Writes `layer{i}_depth`, `layer{i}_normal` and `layer{i}_basecolor` as PNG and EXR into `dir`,
+/// and every attribute of every layer, losslessly, into `gbuffer.exr`
+/// ([`GBufferLayer::write_exr`]; [`GBufferLayer::read_exr`] reads it back).
 pub fn write_layers(dir: &Path, layers: &[GBufferLayer]) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    GBufferLayer::write_exr(&dir.join("gbuffer.exr"), layers)?;
     let refs: Vec<&GBufferLayer> = layers.iter().collect();
     let depth_png = depth_display(&refs);
     for (i, l) in layers.iter().enumerate() {

@@ -606,8 +606,25 @@ impl Renderer {
         scene: &SceneBuffers,
         camera: &Camera,
     ) -> Result<()> {
+        self.encode_frame(device, queue, encoder, scene, camera, false)
+    }
+
+    /// Records a frame; `provided`: the G-buffer layers and visibility depths were written by
+    /// [`render_gbuffer`](Renderer::render_gbuffer), so no raster or resolve pass runs.
+    fn encode_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        provided: bool,
+    ) -> Result<()> {
         camera.validate()?;
-        let plan = self.plan(scene);
+        let mut plan = self.plan(scene);
+        if provided {
+            plan.passes.retain(|p| !(p.starts_with("raster.") || p == "resolve"));
+        }
         if !plan.shadows.is_empty() {
             let rebuild = self.shadows.as_ref().is_none_or(|st| st.key != plan.shadows);
             if rebuild {
@@ -697,14 +714,16 @@ impl Renderer {
                 .forget_lifetime()
         };
 
-        {
+        if !provided {
             let mut pass = begin(encoder, "raster.clear");
             self.fill.encode(device, &mut pass, vis0, u32::MAX);
             if layers == 2 {
                 self.fill.encode(device, &mut pass, &self.vis1, u32::MAX);
             }
         }
-        if one_pass {
+        if provided {
+            // The caller's layers are in place (render_gbuffer wrote them).
+        } else if one_pass {
             let reproject = s.layer1 == Layer1Variant::Reproject;
             let mut pass = begin(encoder, "raster.layers");
             let t = targets(Some(vis0), Some(&self.vis1), Some(prev_vis0));
@@ -726,7 +745,7 @@ impl Renderer {
                 self.raster.encode(device, &mut pass, scene, RasterMode::Layer1, &t);
             }
         }
-        {
+        if !provided {
             let mut pass = begin(encoder, "resolve");
             for (layer, vis) in [vis0, &self.vis1].iter().enumerate().take(layers) {
                 self.resolve.encode(
@@ -1037,6 +1056,86 @@ impl Renderer {
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
             self.encode(device, queue, &mut encoder, scene, camera)?;
+            queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+
+    /// Shades a deep G-buffer that the caller provides instead of rasterizing one: the layers
+    /// (one, or two when the plan reads layer 1; of the renderer's size) are uploaded in the full
+    /// encoding and every pass after `resolve` runs on them, with the scene's lights, materials
+    /// and shadow casters and `camera`'s matrices. This is how the kernels are tested on stored
+    /// G-buffers (fixtures/gbuffer/), and how a host that draws its own G-buffer uses the
+    /// lighting alone. Needs [`Precision::Full`](crate::Precision::Full).
+    pub fn render_gbuffer(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        layers: &[GBufferLayer],
+    ) -> Result<()> {
+        let s = &self.settings;
+        if s.precision != crate::Precision::Full {
+            return Err(Error::setting(
+                "precision",
+                "a provided G-buffer is uploaded in the full encoding (set precision to full)",
+            ));
+        }
+        let needed = self.plan(scene).layers as usize;
+        if layers.len() < needed || layers.len() > 2 {
+            return Err(Error::setting(
+                "gbuffer",
+                format!("{} layers given, the plan reads {needed} (give 1 or 2)", layers.len()),
+            ));
+        }
+        for (i, l) in layers.iter().enumerate() {
+            if (l.width, l.height) != (s.width, s.height)
+                || l.samples.len() != (s.width * s.height) as usize
+            {
+                return Err(Error::setting(
+                    "gbuffer",
+                    format!(
+                        "layer {i} is {}x{} with {} samples, the renderer is {}x{}",
+                        l.width,
+                        l.height,
+                        l.samples.len(),
+                        s.width,
+                        s.height
+                    ),
+                ));
+            }
+        }
+        let write = 1 - self.last;
+        let empty = GBufferLayer {
+            width: s.width,
+            height: s.height,
+            samples: vec![Default::default(); (s.width * s.height) as usize],
+        };
+        let layer1 = layers.get(1).unwrap_or(&empty);
+        for (l, (gbuffer, vis)) in [&layers[0], layer1]
+            .into_iter()
+            .zip([(&self.gbuffer[0], &self.vis0[write]), (&self.gbuffer[1], &self.vis1)])
+        {
+            queue.write_buffer(gbuffer, 0, bytemuck::cast_slice(&l.encode_full()));
+            let words: Vec<u64> =
+                l.samples
+                    .iter()
+                    .map(|s| {
+                        if s.depth > 0.0 {
+                            gbuffer::vis_pack(s.depth, 0)
+                        } else {
+                            gbuffer::VIS_EMPTY
+                        }
+                    })
+                    .collect();
+            queue.write_buffer(vis, 0, bytemuck::cast_slice(&words));
+        }
+        gpu::scoped(device, "deep-gbuffer.frame", || {
+            let label = Some("deep-gbuffer.frame");
+            let mut encoder =
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
+            self.encode_frame(device, queue, &mut encoder, scene, camera, true)?;
             queue.submit([encoder.finish()]);
             Ok(())
         })

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{gpu, render, soup};
+use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture, soup};
 use deep_gbuffer::cpu::{ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid};
 use deep_gbuffer::passes::pyramid::PyramidLayout;
 use deep_gbuffer::{AoSettings, Camera, Scene, Settings};
@@ -208,4 +208,44 @@ fn a_right_angle_corner_matches_the_closed_form() {
     eprintln!("{far} open pixels, {} at the crease with mean AV {crease_mean}", crease.len());
     assert!(far > 100 && crease.len() > 10);
     assert!(crease_mean < 0.8, "the crease is obscured: mean AV {crease_mean}");
+}
+
+/// The stored G-buffers (fixtures/gbuffer/), independent of the rasterizer, with both layers and
+/// with layer 0 alone.
+#[test]
+fn obscurance_of_stored_gbuffers_matches_cpu_reference() {
+    for (i, (file, _)) in GBUFFER_FIXTURES.iter().enumerate() {
+        for two_layers in [true, false] {
+            // A radius of a few pixels' worth of each scene's scale.
+            let radius = [0.4, 1.5][i];
+            let ao = AoSettings { two_layers, radius, ..Default::default() };
+            let f = shade_fixture(
+                i,
+                Settings { timings: false, ao: ao.clone(), ..Settings::default() },
+            );
+            let g = gpu();
+            let layout = PyramidLayout::new(f.layers[0].width, f.layers[0].height);
+            let pyramids = [0, 1].map(|l| {
+                let depth: Vec<f32> = f.layers[l].samples.iter().map(|s| s.depth).collect();
+                cpu_pyramid::pyramid(&depth, &layout)
+            });
+            let p1 = two_layers.then_some(&pyramids[1][..]);
+            let expected =
+                cpu_ao::ao(&f.frame, &ao, &f.layers[0].samples, &layout, &pyramids[0], p1);
+            let raw = f
+                .renderer
+                .read_f32(&g.device, &g.queue, f.renderer.ao_raw_buffer().unwrap())
+                .unwrap();
+            let flipped =
+                raw.iter().zip(&expected).filter(|(a, b)| (**a - **b).abs() > AO_TOLERANCE).count();
+            assert!(
+                (flipped as f64) <= AO_FLIPPED_FRACTION * expected.len() as f64,
+                "{}: {flipped} of {} pixels differ",
+                file,
+                expected.len()
+            );
+            let min = expected.iter().copied().fold(1.0, f32::min);
+            assert!(min < 0.9, "{}: the view holds obscured pixels ({min})", file);
+        }
+    }
 }

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{gpu, render};
+use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture};
 use deep_gbuffer::cpu::pyramid as cpu;
 use deep_gbuffer::passes::pyramid::PyramidLayout;
 use deep_gbuffer::{Scene, Settings};
@@ -39,6 +39,23 @@ fn pyramid_matches_cpu_reference_and_holds_real_depths() {
                     "{v} is not a level-0 depth"
                 );
             }
+        }
+    }
+}
+
+/// The stored G-buffers (fixtures/gbuffer/), independent of the rasterizer: exact.
+#[test]
+fn pyramid_of_stored_gbuffers_matches_cpu_reference() {
+    for (i, (file, _)) in GBUFFER_FIXTURES.iter().enumerate() {
+        let f = shade_fixture(i, Settings { timings: false, layers: 2, ..Settings::default() });
+        let g = gpu();
+        let layout = PyramidLayout::new(f.layers[0].width, f.layers[0].height);
+        for layer in 0..2 {
+            let depth: Vec<f32> = f.layers[layer].samples.iter().map(|s| s.depth).collect();
+            let expected = cpu::pyramid(&depth, &layout);
+            let buffer = f.renderer.pyramid_buffer(layer).expect("obscurance runs");
+            let actual = f.renderer.read_f32(&g.device, &g.queue, buffer).unwrap();
+            assert_eq!(&actual[..expected.len()], &expected[..], "{} layer {layer}", file);
         }
     }
 }

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{gpu, render_frames};
+use common::{GBUFFER_FIXTURES, gpu, render_frames, shade_fixture};
 use deep_gbuffer::cpu::radiosity as cpu;
 use deep_gbuffer::passes::radiosity::RadiosityUniform;
 use deep_gbuffer::{
@@ -255,4 +255,41 @@ fn a_closed_white_box_converges_to_the_closed_form_and_never_exceeds_it() {
     assert!(counted.len() > last.len() * 8 / 10, "most pixels count some taps");
     assert!(close * 10 >= counted.len() * 9, "nine in ten counted pixels reach the closed form");
     assert!((mean - closed_form).abs() <= 0.01 * closed_form, "mean {mean}");
+}
+
+/// The stored G-buffers (fixtures/gbuffer/), independent of the rasterizer: the first frame's
+/// feedback and gather.
+#[test]
+fn radiosity_of_stored_gbuffers_matches_cpu_reference() {
+    for (i, (file, _)) in GBUFFER_FIXTURES.iter().enumerate() {
+        let f = shade_fixture(i, settings(0, 0));
+        let g = gpu();
+        let uniform = RadiosityUniform::new(&RadiositySettings::default(), false, 0);
+        let [b0, b1, raw, _, _] = f.renderer.radiosity_buffers().expect("radiosity runs");
+        let b = [b0, b1]
+            .map(|b| read4(&f.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
+        let direct =
+            f.renderer.read_rgb(&g.device, &g.queue, f.renderer.direct_buffer().unwrap()).unwrap();
+        let expected_b0 = cpu::feedback_without_history(&uniform, &f.layers[0].samples, &direct);
+        for (a, e) in b[0].iter().zip(&expected_b0) {
+            assert!((*a - *e).abs().max_element() <= 1e-5 * e.max_element().max(1.0), "{a} vs {e}");
+        }
+        let layers = [&f.layers[0].samples[..], &f.layers[1].samples[..]];
+        let expected = cpu::gather(&f.frame, &uniform, layers, [&b[0], &b[1]]);
+        let raw = read4(&f.renderer, raw);
+        let differ = raw
+            .iter()
+            .zip(&expected)
+            .filter(|(a, e)| {
+                (**a - **e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
+            })
+            .count();
+        assert!(
+            (differ as f64) <= RADIOSITY_FLIPPED_FRACTION * raw.len() as f64,
+            "{}: {differ} of {} pixels differ from the CPU gather",
+            file,
+            raw.len()
+        );
+        assert!(expected.iter().any(|e| e.truncate().max_element() > 0.01));
+    }
 }

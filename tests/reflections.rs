@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{gpu, render};
+use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture};
 use deep_gbuffer::cpu::reflections as cpu;
 use deep_gbuffer::passes::reflections::ReflectionsUniform;
 use deep_gbuffer::scene::{Material, MeshData};
@@ -305,4 +305,58 @@ fn missed_rays_see_the_environment_map() {
     let refl = read4(&renderer, renderer.reflections_buffer().unwrap());
     let sky = refl.iter().zip(&layer0).filter(|(_, s)| s.depth > 0.0);
     assert!(sky.clone().all(|(v, _)| (v.truncate() - scene.ambient).abs().max_element() < 1e-6));
+}
+
+/// The stored G-buffer of the reflective spheres (fixtures/gbuffer/), independent of the
+/// rasterizer.
+#[test]
+fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
+    let f = shade_fixture(1, Settings { timings: false, ..Settings::default() });
+    assert_eq!(GBUFFER_FIXTURES[1].1, "builtin:grid-20000");
+    let (w, h) = (f.layers[0].width, f.layers[0].height);
+    let [b0, b1, ..] = f.renderer.radiosity_buffers().expect("the spheres are lit");
+    let [radiance0, radiance1] =
+        [b0, b1].map(|b| read4(&f.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
+    let vis1: Vec<u64> = f.layers[1]
+        .samples
+        .iter()
+        .map(|s| {
+            if s.depth > 0.0 {
+                deep_gbuffer::gbuffer::vis_pack(s.depth, 0)
+            } else {
+                deep_gbuffer::gbuffer::VIS_EMPTY
+            }
+        })
+        .collect();
+    let s = Settings::default().reflections;
+    let uniform = ReflectionsUniform {
+        sky: f.scene.ambient.to_array(),
+        max_distance: s.max_distance,
+        thickness: s.thickness,
+        tiles_x: w.div_ceil(8),
+        tiles_y: h.div_ceil(8),
+        env_width: 0,
+        env_height: 0,
+        with_emission: 1,
+        _pad: [0; 2],
+    };
+    let expected = cpu::reflections(
+        &f.frame,
+        &uniform,
+        &f.layers[0].samples,
+        &vis1,
+        [&radiance0, &radiance1],
+        None,
+    );
+    let actual = read4(&f.renderer, f.renderer.reflections_buffer().unwrap());
+    let differ = actual
+        .iter()
+        .zip(&expected)
+        .filter(|(a, e)| (**a - **e).abs().max_element() > 1e-3 * e.max_element().max(1.0))
+        .count();
+    assert!(
+        (differ as f64) <= FLIPPED_FRACTION * actual.len() as f64,
+        "{differ} pixels differ from the CPU march"
+    );
+    assert!(expected.iter().filter(|v| v.w > 0.5).count() > 10, "some rays hit");
 }

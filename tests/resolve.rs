@@ -3,7 +3,7 @@
 mod common;
 
 use approx::assert_abs_diff_eq;
-use common::{fixture, gpu, render};
+use common::{GBUFFER_FIXTURES, fixture, gpu, render};
 use deep_gbuffer::cpu::resolve as cpu;
 use deep_gbuffer::{GSample, Precision, Scene, Settings};
 use glam::Vec3;
@@ -118,4 +118,91 @@ fn cornell_light_is_emissive() {
         layer0.samples.iter().filter(|s| s.material == light && s.depth > 0.0).collect();
     assert!(!lit.is_empty(), "the ceiling light is visible");
     assert!(lit.iter().all(|s| s.emissive == Vec3::new(17.0, 12.0, 4.0)));
+}
+
+/// The stored G-buffers (fixtures/gbuffer/, which the other kernels' tests shade) are what the
+/// rasterizer and resolve produce today for their scene, camera and size.
+#[test]
+fn stored_gbuffers_are_what_the_rasterizer_draws() {
+    let g = gpu();
+    for (file, spec) in GBUFFER_FIXTURES {
+        let stored = deep_gbuffer::GBufferLayer::read_exr(&fixture(file)).unwrap();
+        let mut scene = Scene::from_spec(spec).unwrap();
+        scene.ensure_lights();
+        let (w, h) = (stored[0].width, stored[0].height);
+        let r = render(
+            &scene,
+            &scene.camera_or_default(),
+            Settings { timings: false, layers: 2, ..Settings::with_size(w, h) },
+        );
+        for (layer, expected) in stored.iter().enumerate() {
+            let drawn = r.renderer.read_gbuffer(&g.device, &g.queue, layer).unwrap();
+            for (p, (a, b)) in drawn.samples.iter().zip(&expected.samples).enumerate() {
+                let (a, b) = (a.words(), b.words());
+                for c in 0..16 {
+                    let tolerance = FULL_TOLERANCE * b[c].abs().max(1.0);
+                    assert!(
+                        (a[c] - b[c]).abs() <= tolerance,
+                        "{file} layer {layer} pixel {p} {}: drawn {} stored {}",
+                        deep_gbuffer::gbuffer::EXR_CHANNELS[c],
+                        a[c],
+                        b[c]
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A G-buffer written to EXR reads back bit for bit; files that are not G-buffers are refused
+/// with the file named.
+#[test]
+fn gbuffer_exr_round_trips_and_refuses_other_files() {
+    let stored = deep_gbuffer::GBufferLayer::read_exr(&fixture(GBUFFER_FIXTURES[0].0)).unwrap();
+    let path = std::env::temp_dir().join(format!("deep-gbuffer-{}-rt.exr", std::process::id()));
+    deep_gbuffer::GBufferLayer::write_exr(&path, &stored).unwrap();
+    let back = deep_gbuffer::GBufferLayer::read_exr(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    assert_eq!(back.len(), 2);
+    for (a, b) in back.iter().zip(&stored) {
+        assert_eq!((a.width, a.height), (b.width, b.height));
+        let bits = |l: &deep_gbuffer::GBufferLayer| {
+            l.encode_full().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        };
+        assert_eq!(bits(a), bits(b));
+    }
+    // An RGB image has no G-buffer channels.
+    match deep_gbuffer::GBufferLayer::read_exr(&fixture("environment/gradient.exr")) {
+        Err(deep_gbuffer::Error::ImageRead { message, .. }) => {
+            assert!(message.contains("depth"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        deep_gbuffer::GBufferLayer::read_exr(&fixture("cornell/CornellBox-Original.mtl")),
+        Err(deep_gbuffer::Error::ImageRead { .. })
+    ));
+}
+
+/// A provided G-buffer must fit the renderer: its size, its layer count, the full encoding.
+#[test]
+fn a_provided_gbuffer_that_does_not_fit_is_refused() {
+    let g = gpu();
+    let stored = deep_gbuffer::GBufferLayer::read_exr(&fixture(GBUFFER_FIXTURES[0].0)).unwrap();
+    let scene = Scene::from_spec(GBUFFER_FIXTURES[0].1).unwrap();
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let camera = scene.camera_or_default();
+    let (w, h) = (stored[0].width, stored[0].height);
+    let cases = [
+        (Settings::with_size(w + 1, h), 2, "gbuffer"),
+        (Settings::with_size(w, h), 1, "gbuffer"),
+        (Settings { precision: Precision::Packed, ..Settings::with_size(w, h) }, 2, "precision"),
+    ];
+    for (settings, count, name) in cases {
+        let mut renderer = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings).unwrap();
+        match renderer.render_gbuffer(&g.device, &g.queue, &buffers, &camera, &stored[..count]) {
+            Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
 }

@@ -75,3 +75,38 @@ pub fn soup(triangles: &[[Vec3; 3]], double_sided: bool) -> Scene {
     let indices: Vec<u32> = (0..positions.len() as u32).collect();
     mesh(&positions, &indices, double_sided)
 }
+
+/// The stored deep G-buffers in fixtures/gbuffer/: (file, the scene it shows with the scene's own
+/// camera). Kernels shade them through `Renderer::render_gbuffer`, independent of the rasterizer.
+pub const GBUFFER_FIXTURES: [(&str, &str); 2] = [
+    ("gbuffer/cornell-48x36.exr", "builtin:cornell"),
+    ("gbuffer/grid-20000-64x48.exr", "builtin:grid-20000"),
+];
+
+/// A stored G-buffer shaded by the GPU passes.
+pub struct Shaded {
+    /// The scene (lights, materials, shadow casters), with its default lights added.
+    pub scene: Scene,
+    /// The stored layers.
+    pub layers: Vec<deep_gbuffer::GBufferLayer>,
+    pub frame: FrameUniform,
+    pub renderer: Renderer,
+}
+
+/// Loads fixture `index` of [`GBUFFER_FIXTURES`] and shades it with `settings` (its size set to
+/// the fixture's).
+pub fn shade_fixture(index: usize, settings: Settings) -> Shaded {
+    let (file, spec) = GBUFFER_FIXTURES[index];
+    let layers = deep_gbuffer::GBufferLayer::read_exr(&fixture(file)).expect("fixture G-buffer");
+    assert_eq!(layers.len(), 2, "{file} holds both layers");
+    let mut scene = Scene::from_spec(spec).expect("scene");
+    scene.ensure_lights();
+    let g = gpu();
+    let buffers = SceneBuffers::upload(&g.device, &scene).expect("upload");
+    let settings = Settings { width: layers[0].width, height: layers[0].height, ..settings };
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).expect("renderer");
+    let camera = scene.camera_or_default();
+    renderer.render_gbuffer(&g.device, &g.queue, &buffers, &camera, &layers).expect("shade");
+    let frame = *renderer.frame_uniform().expect("a frame was encoded");
+    Shaded { scene, layers, frame, renderer }
+}
