@@ -33,6 +33,52 @@ enum Command {
     Render(Box<RenderArgs>),
     /// Print the adapter, backend, driver, features and the active raster path.
     Info,
+    /// Ground truth by ray tracing on the CPU, optionally compared with the GPU's estimate.
+    Truth(TruthArgs),
+}
+
+/// The effects the ground-truth tracer computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TruthEffect {
+    /// World-space ambient obscurance with the obscurance kernel's radius and falloff.
+    Ao,
+}
+
+#[derive(clap::Args)]
+struct TruthArgs {
+    /// A .gltf, .glb or .obj file, or builtin:NAME.
+    #[arg(default_value = "builtin:cornell")]
+    scene: String,
+    /// Image size, WxH.
+    #[arg(long, default_value = "160x120", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    #[arg(long)]
+    camera: Option<String>,
+    /// The effect to trace.
+    #[arg(long, value_enum, default_value_t = TruthEffect::Ao)]
+    effect: TruthEffect,
+    /// Rays per pixel.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    /// Seed of the per-pixel sample streams (the same seed gives the same image).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Write the truth as linear EXR; its per-pixel standard error goes to FILE-stderr.exr.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+    /// Write the truth as PNG (values in [0, 1] shown as they are).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Obscurance radius in scene units.
+    #[arg(long, default_value_t = AoSettings::default().radius)]
+    ao_radius: f32,
+    /// Obscurance taps per pixel of the GPU estimate (with --compare).
+    #[arg(long, default_value_t = AoSettings::default().samples)]
+    ao_samples: u32,
+    /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
+    #[arg(long)]
+    compare: bool,
 }
 
 #[derive(clap::Args)]
@@ -171,6 +217,90 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
         }
     }
     camera.validate()
+}
+
+fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
+    let (w, h) = args.size;
+    let ao =
+        AoSettings { radius: args.ao_radius, samples: args.ao_samples, ..AoSettings::default() };
+    ao.validate()?;
+    let mut scene = Scene::from_spec(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    scene.ensure_lights();
+    let mut camera = scene.camera_or_default();
+    if let Some(spec) = &args.camera {
+        apply_camera(&mut camera, spec)?;
+    }
+    let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
+    let bar = indicatif::ProgressBar::new(u64::from(h)).with_style(
+        indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len} rows, {eta} left")
+            .expect("a valid template"),
+    );
+    bar.set_message(format!("tracing {:?} at {w}x{h}, {} rays per pixel", args.effect, args.spp));
+    let started = std::time::Instant::now();
+    let image = match args.effect {
+        TruthEffect::Ao => {
+            tracer.ambient_obscurance(&scene, &camera, w, h, &ao, args.spp, args.seed, &|| {
+                bar.inc(1)
+            })?
+        }
+    };
+    bar.finish_and_clear();
+    println!(
+        "truth {:?}: {w}x{h}, {} rays per pixel, {:.1} s; mean standard error {:.5}",
+        args.effect,
+        args.spp,
+        started.elapsed().as_secs_f32(),
+        image.mean_stderr()
+    );
+    if let Some(path) = &args.exr {
+        output::write_exr(path, w, h, &image.value)?;
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("truth");
+        let stderr_path = path.with_file_name(format!("{stem}-stderr.exr"));
+        output::write_exr(&stderr_path, w, h, &image.stderr)?;
+    }
+    if let Some(path) = &args.out {
+        output::write_png_display(path, w, h, &image.value)?;
+    }
+    if args.compare {
+        let gpu = open_gpu(adapter)?;
+        let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
+        let settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
+        let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
+        renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+        let Some(av) = renderer.ao_buffer() else {
+            return Err(Error::InvalidSetting {
+                name: "effect",
+                message: "the scene has no ambient term, so its plan runs no obscurance".into(),
+            });
+        };
+        let av = renderer.read_f32(&gpu.device, &gpu.queue, av)?;
+        let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
+        let estimate: Vec<Vec3> =
+            av.iter().take((w * h) as usize).map(|v| Vec3::splat(*v)).collect();
+        let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
+        let stats = deep_gbuffer::truth::metrics::compare(&estimate, &mask, &image);
+        let timings = renderer.timings(&gpu.device)?;
+        let ms: f64 = timings
+            .iter()
+            .filter(|t| matches!(t.name.as_str(), "pyramid" | "ao" | "ao.blur"))
+            .map(|t| t.ms)
+            .sum();
+        println!(
+            "gpu ao ({} taps, radius {}): rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}); pyramid + ao + ao.blur {:.3} ms on {}",
+            ao.samples,
+            ao.radius,
+            stats.rmse,
+            stats.mae,
+            stats.pixels,
+            stats.truth_stderr,
+            ms,
+            gpu.describe()
+        );
+    }
+    Ok(())
 }
 
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
@@ -396,6 +526,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render(&cli.adapter, *args),
         Command::Info => info(&cli.adapter),
+        Command::Truth(args) => truth(&cli.adapter, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

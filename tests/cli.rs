@@ -140,3 +140,31 @@ fn info_names_adapter_and_raster_path() {
         "{text}"
     );
 }
+
+#[test]
+fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
+    let dir = out_dir("truth");
+    let output = cli()
+        .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "8", "--compare", "--exr"])
+        .arg(dir.join("ao.exr"))
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("mean standard error"), "{stdout}");
+    assert!(stdout.contains("rmse") && stdout.contains(" ms on "), "{stdout}");
+    for file in ["ao.exr", "ao-stderr.exr"] {
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            dir.join(file),
+            |r, _| vec![0.0f32; r.area()],
+            |v, p, (r, _g, _b, _a): (f32, f32, f32, f32)| v[p.y() * 24 + p.x()] = r,
+        )
+        .unwrap();
+        let values = image.layer_data.channel_data.pixels;
+        assert_eq!(values.len(), 24 * 18);
+        assert!(values.iter().all(|v| (0.0..=1.0).contains(v)), "{file}");
+    }
+    let bad = cli().args(["truth", "--spp", "0"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&bad.stderr).trim().lines().count(), 1);
+}

@@ -1,0 +1,251 @@
+//! Ground truth by ray tracing on the CPU, for the accuracy figures: what each screen-space
+//! approximation would be if it could see the whole scene.
+//!
+//! A [`Tracer`] holds the scene's triangles in a compressed wide BVH (the `obvhs` crate). Primary
+//! rays go through pixel centres exactly as the rasterizer samples them, and the surface they hit
+//! is resolved by the CPU resolve ([`crate::cpu::resolve::resolve_pixel`]), so a truth image and
+//! a GPU frame describe the same points with the same normals. Pixels are traced in parallel
+//! (rayon); each pixel draws its samples from its own seeded stream, so a run is reproducible
+//! whatever the thread count.
+
+pub mod metrics;
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3, Vec3A, Vec4Swizzles};
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::cpu::frame::{mat_mul, view_position};
+use crate::gbuffer::{GSample, vis_pack};
+use crate::gpu::FrameUniform;
+use crate::gpu::frame::CameraMatrices;
+use crate::scene::{Camera, Scene};
+use crate::settings::AoSettings;
+use crate::{Error, Result};
+
+/// A scene's triangles in a BVH, ready for rays.
+pub struct Tracer {
+    bvh: CwBvh,
+    triangles: Vec<Triangle>,
+    /// Per triangle: back faces are culled for primary rays (single-sided material).
+    single_sided: Vec<bool>,
+    /// A length on the scale of the scene (its bounds' diagonal), for ray offsets.
+    scale: f32,
+}
+
+/// A ground-truth image: per pixel the estimate, its standard error (the estimate's own noise,
+/// the floor under any comparison), and whether a surface is visible there.
+#[derive(Clone, Debug)]
+pub struct TruthImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The estimate (rgb; scalar effects repeat one value).
+    pub value: Vec<Vec3>,
+    /// Standard error of the estimate (sample standard deviation over sqrt(spp)).
+    pub stderr: Vec<Vec3>,
+    /// The primary ray hit a surface.
+    pub visible: Vec<bool>,
+}
+
+impl TruthImage {
+    /// The mean standard error over visible pixels (first channel).
+    pub fn mean_stderr(&self) -> f32 {
+        let (sum, n) = self
+            .stderr
+            .iter()
+            .zip(&self.visible)
+            .filter(|(_, v)| **v)
+            .fold((0.0f64, 0usize), |(s, n), (e, _)| (s + f64::from(e.x), n + 1));
+        if n == 0 { 0.0 } else { (sum / n as f64) as f32 }
+    }
+}
+
+/// A point on the unit hemisphere around `n`, cosine distributed, from two uniform numbers.
+fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
+    let r = u.x.sqrt();
+    let phi = 2.0 * PI * u.y;
+    let (t, b) = n.any_orthonormal_pair();
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt()).normalize()
+}
+
+impl Tracer {
+    /// Builds the BVH of `scene` (which must be valid: see [`Scene::validate`]).
+    pub fn new(scene: &Scene) -> Result<Tracer> {
+        scene.validate()?;
+        let triangles: Vec<Triangle> = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let [v0, v1, v2] = t.map(|i| Vec3A::from(scene.positions[i as usize]));
+                Triangle { v0, v1, v2 }
+            })
+            .collect();
+        let single_sided = scene
+            .triangle_materials
+            .iter()
+            .map(|m| scene.materials.get(*m as usize).is_none_or(|m| !m.double_sided))
+            .collect();
+        let (lo, hi) = scene
+            .positions
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let scale = (hi - lo).length().max(1e-6);
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &triangles,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        Ok(Tracer { bvh, triangles, single_sided, scale })
+    }
+
+    /// The nearest hit along `origin + t dir` for t in (tmin, tmax): triangle index and t. With
+    /// `cull`, back faces of single-sided triangles are not hit (as the rasterizer culls them).
+    pub fn closest(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        (tmin, tmax): (f32, f32),
+        cull: bool,
+    ) -> Option<(u32, f32)> {
+        let ray = Ray::new(origin.into(), dir.into(), tmin, tmax);
+        let mut hit = RayHit::none();
+        let found = self.bvh.ray_traverse(ray, &mut hit, |ray, id| {
+            let index = self.bvh.primitive_indices[id] as usize;
+            let tri = &self.triangles[index];
+            if cull && self.single_sided[index] {
+                let facing = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0).dot(ray.direction);
+                if facing >= 0.0 {
+                    return f32::INFINITY;
+                }
+            }
+            tri.intersect(ray)
+        });
+        found.then(|| (self.bvh.primitive_indices[hit.primitive_id as usize], hit.t))
+    }
+
+    /// The layer-0 surface at pixel (x, y) as the G-buffer would hold it (default: none).
+    pub fn primary(&self, f: &FrameUniform, scene: &Scene, x: u32, y: u32) -> GSample {
+        let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let a = view_position(f, px, 0.0);
+        let b = view_position(f, px, 1.0) - a;
+        let to_world = |v: Vec3, w: f32| mat_mul(&f.inv_view, v.extend(w).to_array()).xyz();
+        let origin = to_world(a, 1.0);
+        // b advances the view depth by 1 per unit, so t along it is the view depth.
+        let dir = to_world(b, 0.0);
+        // What lies nearer than the near plane is clipped away, as the rasterizer clips it.
+        let near = if f.ortho != 0 { f.near } else { f.near.max(0.0) };
+        match self.closest(origin, dir, (near, f32::INFINITY), true) {
+            Some((id, depth)) => {
+                crate::cpu::resolve::resolve_pixel(f, scene, vis_pack(depth, id), x, y)
+            }
+            _ => GSample::default(),
+        }
+    }
+
+    /// World-space ambient obscurance with the obscurance kernel's radius and falloff:
+    ///
+    ///     AV = clamp(1 - intensity * (1/pi) * integral over the hemisphere of
+    ///                 max(1 - d(w)^2 / r^2, 0) cos(theta) dw, 0, 1)
+    ///
+    /// with d(w) the distance to the first surface in direction w (any face; nothing: no
+    /// obscurance). It is estimated with `spp` cosine-distributed rays per pixel, so each ray
+    /// contributes its falloff alone. The kernel's bias beta (a guard against self-occlusion on
+    /// tessellated curves, a screen-space artefact) has no place here. `progress` is called once
+    /// per finished row.
+    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
+    pub fn ambient_obscurance(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        ao: &AoSettings,
+        spp: u32,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<TruthImage> {
+        check_size(width, height, spp)?;
+        ao.validate()?;
+        camera.validate()?;
+        let m = CameraMatrices::new(camera, width, height);
+        let f = FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0));
+        let r2 = ao.radius * ao.radius;
+        let eps = 1e-5 * self.scale;
+        let rows: Vec<Vec<(f32, f32, bool)>> = (0..height)
+            .into_par_iter()
+            .map(|y| {
+                let row = (0..width)
+                    .map(|x| {
+                        let s = self.primary(&f, scene, x, y);
+                        if s.depth.is_nan() || s.depth <= 0.0 {
+                            return (1.0, 0.0, false);
+                        }
+                        let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let view = view_position(&f, px, s.depth);
+                        let point = mat_mul(&f.inv_view, view.extend(1.0).to_array()).xyz();
+                        let origin = point + s.normal * eps;
+                        let mut rng = pixel_rng(seed, x, y, width);
+                        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                        for _ in 0..spp {
+                            let u = Vec2::new(rng.random(), rng.random());
+                            let w = cosine_direction(s.normal, u);
+                            let o = match self.closest(origin, w, (0.0, ao.radius), false) {
+                                Some((_, d)) => (1.0 - d * d / r2).max(0.0),
+                                None => 0.0,
+                            };
+                            sum += f64::from(o);
+                            sum2 += f64::from(o) * f64::from(o);
+                        }
+                        let n = f64::from(spp);
+                        let mean = sum / n;
+                        let var = if spp > 1 {
+                            (sum2 / n - mean * mean).max(0.0) * n / (n - 1.0)
+                        } else {
+                            0.0
+                        };
+                        let av = (1.0 - f64::from(ao.intensity) * mean).clamp(0.0, 1.0);
+                        let se = f64::from(ao.intensity) * (var / n).sqrt();
+                        (av as f32, se as f32, true)
+                    })
+                    .collect();
+                progress();
+                row
+            })
+            .collect();
+        let flat: Vec<_> = rows.into_iter().flatten().collect();
+        Ok(TruthImage {
+            width,
+            height,
+            value: flat.iter().map(|v| Vec3::splat(v.0)).collect(),
+            stderr: flat.iter().map(|v| Vec3::splat(v.1)).collect(),
+            visible: flat.iter().map(|v| v.2).collect(),
+        })
+    }
+}
+
+/// The sample stream of pixel (x, y): the same on every run and thread count.
+fn pixel_rng(seed: u64, x: u32, y: u32, width: u32) -> ChaCha8Rng {
+    let index = u64::from(y) * u64::from(width) + u64::from(x);
+    ChaCha8Rng::seed_from_u64(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+fn check_size(width: u32, height: u32, spp: u32) -> Result<()> {
+    if width == 0
+        || height == 0
+        || width > crate::gpu::frame::MAX_IMAGE_SIDE
+        || height > crate::gpu::frame::MAX_IMAGE_SIDE
+    {
+        return Err(Error::setting("size", format!("{width}x{height} (each side 1 to 16384)")));
+    }
+    if spp == 0 {
+        return Err(Error::setting("spp", "0 (at least one sample per pixel)"));
+    }
+    Ok(())
+}
