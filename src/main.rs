@@ -42,6 +42,8 @@ enum Command {
 enum TruthEffect {
     /// World-space ambient obscurance with the obscurance kernel's radius and falloff.
     Ao,
+    /// Diffuse indirect irradiance by path tracing (--bounces surfaces per path).
+    Indirect,
 }
 
 #[derive(clap::Args)]
@@ -70,6 +72,12 @@ struct TruthArgs {
     /// Write the truth as PNG (values in [0, 1] shown as they are).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Surfaces along a path for --effect indirect (1: one bounce).
+    #[arg(long, default_value_t = 1)]
+    bounces: u32,
+    /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
     /// Obscurance radius in scene units.
     #[arg(long, default_value_t = AoSettings::default().radius)]
     ao_radius: f32,
@@ -240,11 +248,14 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     );
     bar.set_message(format!("tracing {:?} at {w}x{h}, {} rays per pixel", args.effect, args.spp));
     let started = std::time::Instant::now();
+    let progress = || bar.inc(1);
+    let (spp, seed) = (args.spp, args.seed);
     let image = match args.effect {
         TruthEffect::Ao => {
-            tracer.ambient_obscurance(&scene, &camera, w, h, &ao, args.spp, args.seed, &|| {
-                bar.inc(1)
-            })?
+            tracer.ambient_obscurance(&scene, &camera, w, h, &ao, spp, seed, &progress)?
+        }
+        TruthEffect::Indirect => {
+            tracer.indirect(&scene, &camera, w, h, args.bounces, spp, seed, &progress)?
         }
     };
     bar.finish_and_clear();
@@ -269,33 +280,52 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
         let settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
         let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
-        renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
-        let Some(av) = renderer.ao_buffer() else {
+        if args.frames == 0 {
+            return Err(Error::InvalidSetting {
+                name: "frames",
+                message: "0 (at least one)".into(),
+            });
+        }
+        for _ in 0..args.frames {
+            renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+        }
+        let (buffer, passes, what): (_, &[&str], _) = match args.effect {
+            TruthEffect::Ao => (renderer.ao_buffer(), &["pyramid", "ao", "ao.blur"], "obscurance"),
+            TruthEffect::Indirect => (
+                renderer.radiosity_buffers().map(|b| b[4]),
+                &["direct", "radiosity", "radiosity.temporal", "radiosity.blur"],
+                "radiosity",
+            ),
+        };
+        let Some(buffer) = buffer else {
             return Err(Error::InvalidSetting {
                 name: "effect",
-                message: "the scene has no ambient term, so its plan runs no obscurance".into(),
+                message: format!("the scene's plan runs no {what} to compare"),
             });
         };
-        let av = renderer.read_f32(&gpu.device, &gpu.queue, av)?;
+        let values = renderer.read_f32(&gpu.device, &gpu.queue, buffer)?;
+        let n = (w * h) as usize;
+        let estimate: Vec<Vec3> = match args.effect {
+            TruthEffect::Ao => values.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
+            TruthEffect::Indirect => {
+                values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+            }
+        };
         let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
-        let estimate: Vec<Vec3> =
-            av.iter().take((w * h) as usize).map(|v| Vec3::splat(*v)).collect();
         let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
         let stats = deep_gbuffer::truth::metrics::compare(&estimate, &mask, &image);
         let timings = renderer.timings(&gpu.device)?;
-        let ms: f64 = timings
-            .iter()
-            .filter(|t| matches!(t.name.as_str(), "pyramid" | "ao" | "ao.blur"))
-            .map(|t| t.ms)
-            .sum();
+        let ms: f64 =
+            timings.iter().filter(|t| passes.contains(&t.name.as_str())).map(|t| t.ms).sum();
         println!(
-            "gpu ao ({} taps, radius {}): rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}); pyramid + ao + ao.blur {:.3} ms on {}",
-            ao.samples,
-            ao.radius,
+            "gpu {what}: rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}, mean {:.4} vs truth {:.4}); {} {:.3} ms on {}",
             stats.rmse,
             stats.mae,
             stats.pixels,
             stats.truth_stderr,
+            stats.estimate_mean,
+            stats.truth_mean,
+            passes.join(" + "),
             ms,
             gpu.describe()
         );

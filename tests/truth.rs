@@ -60,7 +60,8 @@ fn obscurance_under_a_ceiling_has_the_closed_form() {
     let tracer = Tracer::new(&open).unwrap();
     let image = tracer.ambient_obscurance(&open, &camera, 8, 6, &ao, 64, 7, &|| ()).unwrap();
     assert!(image.visible.iter().filter(|v| **v).count() > 10);
-    assert!(image.value.iter().all(|v| v.x == 1.0), "an open plane is unobscured");
+    let seen = image.value.iter().zip(&image.visible).filter(|(_, v)| **v);
+    assert!(seen.clone().all(|(v, _)| v.x == 1.0), "an open plane is unobscured");
 }
 
 #[test]
@@ -121,4 +122,47 @@ fn invalid_truth_requests_are_refused() {
         }
     }
     assert!(Tracer::new(&Scene::default()).is_err(), "an empty scene");
+}
+
+/// Inside a closed box whose walls all emit Le and reflect rho, with no light: every path sees
+/// the same radiance, so the estimate has no noise and equals the closed form,
+/// E = pi Le (1 + rho + ... + rho^(bounces - 1)).
+#[test]
+fn indirect_light_in_a_closed_white_box_has_the_closed_form() {
+    let (rho, le) = (0.5f32, 1.0f32);
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+            let c = Vec3::AXES[axis] * sign;
+            let corners = [c - u - v, c + u - v, c + u + v, c - u + v];
+            for t in [[0, 1, 2], [0, 2, 3]] {
+                let mut tri = t.map(|i| corners[i]);
+                if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(-c) < 0.0 {
+                    tri.swap(1, 2);
+                }
+                triangles.push(tri);
+            }
+        }
+    }
+    let mut scene = soup(&triangles, false);
+    scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
+    scene.materials[0].emissive = Vec3::splat(le);
+    let camera =
+        Camera::perspective(Vec3::new(0.3, 0.2, 0.6), Vec3::new(-1.0, -0.8, -1.0), 70.0, 0.01);
+    let tracer = Tracer::new(&scene).unwrap();
+    for bounces in [1, 3] {
+        let image = tracer.indirect(&scene, &camera, 12, 9, bounces, 16, 1, &|| ()).unwrap();
+        let expected =
+            std::f32::consts::PI * le * (0..bounces).map(|i| rho.powi(i as i32)).sum::<f32>();
+        assert!(image.visible.iter().all(|v| *v), "the box fills the view");
+        for (v, se) in image.value.iter().zip(&image.stderr) {
+            assert!(
+                (v.x - expected).abs() <= 1e-4 * expected,
+                "{bounces} bounces: {v} vs {expected}"
+            );
+            assert!(se.x <= 1e-4 * expected, "no noise: {se}");
+        }
+    }
+    assert!(tracer.indirect(&scene, &camera, 4, 4, 0, 4, 1, &|| ()).is_err(), "zero bounces");
 }

@@ -16,7 +16,7 @@ fn texel(t: &Texture, x: u32, y: u32) -> Vec3 {
     Vec3::from_array(std::array::from_fn(|k| srgb_to_linear(f32::from(t.rgba8[i + k]) / 255.0)))
 }
 
-fn sample_texture(t: &Texture, uv: Vec2) -> Vec3 {
+pub(crate) fn sample_texture(t: &Texture, uv: Vec2) -> Vec3 {
     let size = Vec2::new(t.width as f32, t.height as f32);
     let p = uv.fract_gl() * size - 0.5;
     let f = p.fract_gl();

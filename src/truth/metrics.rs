@@ -15,12 +15,17 @@ pub struct ErrorStats {
     pub pixels: usize,
     /// The truth's own mean standard error over those pixels: differences below it are noise.
     pub truth_stderr: f32,
+    /// Mean of the truth over those pixels (for scale).
+    pub truth_mean: f32,
+    /// Mean of the estimate over those pixels (its bias shows against `truth_mean`).
+    pub estimate_mean: f32,
 }
 
 /// Compares `estimate` (one value per pixel, rgb) with `truth` over the pixels where the truth
 /// sees a surface and `mask` (the estimate's layer 0 sees one too) holds.
 pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorStats {
     let (mut sq, mut abs, mut se, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    let (mut tm, mut em) = (0.0f64, 0.0f64);
     for (((e, m), (t, s)), v) in
         estimate.iter().zip(mask).zip(truth.value.iter().zip(&truth.stderr)).zip(&truth.visible)
     {
@@ -31,6 +36,8 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         sq += d.length_squared() / 3.0;
         abs += d.abs().element_sum() / 3.0;
         se += f64::from(s.element_sum()) / 3.0;
+        tm += f64::from(t.element_sum()) / 3.0;
+        em += f64::from(e.element_sum()) / 3.0;
         n += 1;
     }
     if n == 0 {
@@ -42,5 +49,7 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         mae: (abs / n_f) as f32,
         pixels: n,
         truth_stderr: (se / n_f) as f32,
+        truth_mean: (tm / n_f) as f32,
+        estimate_mean: (em / n_f) as f32,
     }
 }

@@ -24,7 +24,7 @@ use crate::cpu::frame::{mat_mul, view_position};
 use crate::gbuffer::{GSample, vis_pack};
 use crate::gpu::FrameUniform;
 use crate::gpu::frame::CameraMatrices;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, GpuLight, Scene};
 use crate::settings::AoSettings;
 use crate::{Error, Result};
 
@@ -178,41 +178,187 @@ impl Tracer {
         let f = FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0));
         let r2 = ao.radius * ao.radius;
         let eps = 1e-5 * self.scale;
-        let rows: Vec<Vec<(f32, f32, bool)>> = (0..height)
+        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+            let origin = point + s.normal * eps;
+            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
+            for _ in 0..spp {
+                let u = Vec2::new(rng.random(), rng.random());
+                let w = cosine_direction(s.normal, u);
+                let o = match self.closest(origin, w, (0.0, ao.radius), false) {
+                    Some((_, d)) => (1.0 - d * d / r2).max(0.0),
+                    None => 0.0,
+                };
+                sum += Vec3::splat(o);
+                sum2 += Vec3::splat(o * o);
+            }
+            let (mean, se) = mean_and_stderr(sum, sum2, spp);
+            let av = (Vec3::ONE - ao.intensity * mean).clamp(Vec3::ZERO, Vec3::ONE);
+            (av, ao.intensity * se)
+        })
+    }
+}
+
+/// What a ray sees where it hits a triangle: the shading normal (facing the ray's origin) and
+/// the material's diffuse albedo (times 1 - metallic) and emission.
+struct Surface {
+    normal: Vec3,
+    diffuse: Vec3,
+    emission: Vec3,
+}
+
+impl Tracer {
+    fn surface(&self, scene: &Scene, id: u32, point: Vec3, dir: Vec3) -> Surface {
+        let [i0, i1, i2] = scene.triangles[id as usize].map(|i| i as usize);
+        let (a, b, c) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
+        let geo = (b - a).cross(c - a);
+        // Barycentrics of the point in the triangle's plane.
+        let area = geo.length_squared();
+        let bary = if area > 0.0 {
+            let u = (c - b).cross(point - b).dot(geo) / area;
+            let v = (a - c).cross(point - c).dot(geo) / area;
+            Vec3::new(u, v, 1.0 - u - v).clamp(Vec3::ZERO, Vec3::ONE)
+        } else {
+            Vec3::splat(1.0 / 3.0)
+        };
+        let geo = geo.normalize_or(-dir);
+        let interp =
+            scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
+        let mut normal = interp.normalize_or(geo);
+        if geo.dot(dir) > 0.0 {
+            normal = -normal;
+        }
+        if normal.dot(dir) > 0.0 {
+            // An interpolated normal facing away from the ray: use the face.
+            normal = if geo.dot(dir) > 0.0 { -geo } else { geo };
+        }
+        let m = scene.triangle_materials[id as usize];
+        let Some(material) = scene.materials.get(m as usize) else {
+            return Surface { normal, diffuse: Vec3::ZERO, emission: Vec3::ZERO };
+        };
+        let mut albedo = material.base_color.xyz();
+        if let Some(t) = material.base_color_texture.and_then(|t| scene.textures.get(t as usize)) {
+            let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
+            albedo *= crate::cpu::resolve::sample_texture(t, uv);
+        }
+        let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+        Surface {
+            normal,
+            diffuse: albedo * (1.0 - material.metallic.clamp(0.0, 1.0)),
+            emission: material.emissive.max(Vec3::ZERO),
+        }
+    }
+
+    /// Irradiance the lights deliver at `point` (normal `n`), with shadow rays.
+    fn direct_irradiance(&self, lights: &[GpuLight], point: Vec3, n: Vec3) -> Vec3 {
+        let origin = point + n * (1e-5 * self.scale);
+        let mut sum = Vec3::ZERO;
+        for light in lights {
+            let (e, l) = crate::cpu::direct::light_at(light, point);
+            let nl = n.dot(l);
+            if nl <= 0.0 || e.max_element() <= 0.0 {
+                continue;
+            }
+            let reach = if light.kind == 0 {
+                f32::INFINITY
+            } else {
+                (Vec3::from(light.position) - origin).length()
+            };
+            if self.closest(origin, l, (0.0, reach), false).is_none() {
+                sum += e * nl;
+            }
+        }
+        sum
+    }
+
+    /// Diffuse indirect irradiance by path tracing, the quantity the radiosity pass estimates:
+    ///
+    ///     E(X) = integral over the hemisphere of L(w) cos(theta) dw,
+    ///
+    /// where L is the outgoing diffuse radiance of the first surface in direction w: its emission
+    /// plus its diffuse albedo (times 1 - metallic) / pi times the light arriving there, from
+    /// the lights (with shadow rays) and, for `bounces` > 1, from further surfaces, recursively,
+    /// up to `bounces` surfaces along a path. Directions that leave the scene bring nothing (the
+    /// sky is the ambient term's). Cosine-distributed paths, `spp` per pixel, so a path's
+    /// estimate is pi times the radiance it carries back. Specular reflection on the way is not
+    /// followed (the radiosity pass gathers diffuse light).
+    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
+    pub fn indirect(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        bounces: u32,
+        spp: u32,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<TruthImage> {
+        check_size(width, height, spp)?;
+        if bounces == 0 {
+            return Err(Error::setting("bounces", "0 (at least one surface along a path)"));
+        }
+        camera.validate()?;
+        let m = CameraMatrices::new(camera, width, height);
+        let f = FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0));
+        let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+        let eps = 1e-5 * self.scale;
+        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+            let mut sum = Vec3::ZERO;
+            let mut sum2 = Vec3::ZERO;
+            for _ in 0..spp {
+                let mut radiance = Vec3::ZERO;
+                let mut throughput = Vec3::ONE;
+                let (mut origin, mut normal) = (point + s.normal * eps, s.normal);
+                for bounce in 0..bounces {
+                    let u = Vec2::new(rng.random(), rng.random());
+                    let w = cosine_direction(normal, u);
+                    let Some((id, t)) = self.closest(origin, w, (0.0, f32::INFINITY), false) else {
+                        break;
+                    };
+                    let hit = origin + w * t;
+                    let surface = self.surface(scene, id, hit, w);
+                    let e = self.direct_irradiance(&lights, hit, surface.normal);
+                    radiance += throughput * (surface.emission + surface.diffuse / PI * e);
+                    throughput *= surface.diffuse;
+                    if bounce + 1 == bounces || throughput.max_element() <= 0.0 {
+                        break;
+                    }
+                    (origin, normal) = (hit + surface.normal * eps, surface.normal);
+                }
+                let estimate = radiance * PI;
+                sum += estimate;
+                sum2 += estimate * estimate;
+            }
+            mean_and_stderr(sum, sum2, spp)
+        })
+    }
+
+    /// Runs `estimate(layer-0 sample, its world point, its sample stream)` for every pixel in
+    /// parallel and gathers mean and standard error.
+    fn per_pixel(
+        &self,
+        f: &FrameUniform,
+        scene: &Scene,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+        estimate: impl Fn(&GSample, Vec3, &mut ChaCha8Rng) -> (Vec3, Vec3) + Sync,
+    ) -> Result<TruthImage> {
+        let (width, height) = (f.width, f.height);
+        let rows: Vec<Vec<(Vec3, Vec3, bool)>> = (0..height)
             .into_par_iter()
             .map(|y| {
                 let row = (0..width)
                     .map(|x| {
-                        let s = self.primary(&f, scene, x, y);
+                        let s = self.primary(f, scene, x, y);
                         if s.depth.is_nan() || s.depth <= 0.0 {
-                            return (1.0, 0.0, false);
+                            return (Vec3::ZERO, Vec3::ZERO, false);
                         }
                         let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                        let view = view_position(&f, px, s.depth);
+                        let view = view_position(f, px, s.depth);
                         let point = mat_mul(&f.inv_view, view.extend(1.0).to_array()).xyz();
-                        let origin = point + s.normal * eps;
                         let mut rng = pixel_rng(seed, x, y, width);
-                        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                        for _ in 0..spp {
-                            let u = Vec2::new(rng.random(), rng.random());
-                            let w = cosine_direction(s.normal, u);
-                            let o = match self.closest(origin, w, (0.0, ao.radius), false) {
-                                Some((_, d)) => (1.0 - d * d / r2).max(0.0),
-                                None => 0.0,
-                            };
-                            sum += f64::from(o);
-                            sum2 += f64::from(o) * f64::from(o);
-                        }
-                        let n = f64::from(spp);
-                        let mean = sum / n;
-                        let var = if spp > 1 {
-                            (sum2 / n - mean * mean).max(0.0) * n / (n - 1.0)
-                        } else {
-                            0.0
-                        };
-                        let av = (1.0 - f64::from(ao.intensity) * mean).clamp(0.0, 1.0);
-                        let se = f64::from(ao.intensity) * (var / n).sqrt();
-                        (av as f32, se as f32, true)
+                        let (mean, se) = estimate(&s, point, &mut rng);
+                        (mean, se, true)
                     })
                     .collect();
                 progress();
@@ -223,11 +369,22 @@ impl Tracer {
         Ok(TruthImage {
             width,
             height,
-            value: flat.iter().map(|v| Vec3::splat(v.0)).collect(),
-            stderr: flat.iter().map(|v| Vec3::splat(v.1)).collect(),
+            value: flat.iter().map(|v| v.0).collect(),
+            stderr: flat.iter().map(|v| v.1).collect(),
             visible: flat.iter().map(|v| v.2).collect(),
         })
     }
+}
+
+/// Mean and standard error of `n` samples from their sum and sum of squares.
+fn mean_and_stderr(sum: Vec3, sum2: Vec3, n: u32) -> (Vec3, Vec3) {
+    let n = n as f32;
+    let mean = sum / n;
+    if n < 2.0 {
+        return (mean, Vec3::ZERO);
+    }
+    let var = ((sum2 / n - mean * mean) * (n / (n - 1.0))).max(Vec3::ZERO);
+    (mean, (var / n).sqrt())
 }
 
 /// The sample stream of pixel (x, y): the same on every run and thread count.
