@@ -42,6 +42,7 @@ pub mod plan;
 mod renderer;
 pub mod scene;
 pub mod settings;
+pub mod sweep;
 pub mod truth;
 
 pub use environment::Environment;

@@ -35,6 +35,40 @@ enum Command {
     Info,
     /// Ground truth by ray tracing on the CPU, optionally compared with the GPU's estimate.
     Truth(TruthArgs),
+    /// Render a grid of accuracy settings, time every pass and measure each effect's error
+    /// against ground truth: sweep.csv, sweep.md and pareto.png.
+    Sweep(SweepArgs),
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// A .gltf, .glb or .obj file, or builtin:NAME.
+    #[arg(default_value = "builtin:cornell")]
+    scene: String,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Image size, WxH.
+    #[arg(long, default_value = "160x120", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    #[arg(long)]
+    camera: Option<String>,
+    /// Rays per pixel of the ground truth.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    /// Obscurance tap counts to sweep (comma separated).
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().ao_samples)]
+    ao_samples: Vec<u32>,
+    /// Radiosity tap counts to sweep.
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().radiosity_samples)]
+    radiosity_samples: Vec<u32>,
+    /// Layer counts to sweep (1, 2).
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().layers)]
+    layers: Vec<u32>,
+    /// G-buffer encodings to sweep.
+    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().precision)]
+    precision: Vec<Precision>,
 }
 
 /// The effects the ground-truth tracer computes.
@@ -333,6 +367,70 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     Ok(())
 }
 
+fn progress_bar(len: u64, message: String) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len).with_style(
+        indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len}, {eta} left")
+            .expect("a valid template"),
+    );
+    bar.set_message(message);
+    bar
+}
+
+fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
+    use deep_gbuffer::sweep;
+    let (w, h) = args.size;
+    let grid = sweep::Grid {
+        ao_samples: args.ao_samples,
+        radiosity_samples: args.radiosity_samples,
+        layers: args.layers,
+        precision: args.precision,
+    };
+    if let Some(l) = grid.layers.iter().find(|l| !(1..=2).contains(*l)) {
+        return Err(Error::InvalidSetting { name: "layers", message: format!("{l} (1 or 2)") });
+    }
+    let configurations = grid.configurations();
+    for k in &configurations {
+        k.settings(w, h).validate()?;
+    }
+    let mut scene = Scene::from_spec(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    scene.ensure_lights();
+    let mut camera = scene.camera_or_default();
+    if let Some(spec) = &args.camera {
+        apply_camera(&mut camera, spec)?;
+    }
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
+    let gpu = open_gpu(adapter)?;
+    let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
+    let bar = progress_bar(u64::from(2 * h), format!("ground truth, {} rays per pixel", args.spp));
+    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let bar = progress_bar(configurations.len() as u64, "configurations".into());
+    let mut rows = Vec::new();
+    for k in &configurations {
+        rows.push(sweep::measure(&gpu.device, &gpu.queue, &buffers, &camera, &truth, k)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let heading = format!(
+        "Sweep of {} at {w}x{h} on {}; truth {} rays per pixel (noise: obscurance {:.4}, irradiance {:.4})",
+        args.scene,
+        gpu.describe(),
+        args.spp,
+        truth.ao.mean_stderr(),
+        truth.indirect.mean_stderr()
+    );
+    sweep::write_csv(&args.out.join("sweep.csv"), &rows)?;
+    sweep::write_markdown(&args.out.join("sweep.md"), &rows, &heading)?;
+    sweep::plot_pareto(&args.out.join("pareto.png"), &rows, &format!("{} at {w}x{h}", args.scene))?;
+    println!("{heading}");
+    println!("{} configurations -> {}", rows.len(), args.out.display());
+    Ok(())
+}
+
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
     Gpu::new(&GpuOptions { adapter: cli_adapter.clone() })
 }
@@ -557,6 +655,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render(&cli.adapter, *args),
         Command::Info => info(&cli.adapter),
         Command::Truth(args) => truth(&cli.adapter, args),
+        Command::Sweep(args) => sweep(&cli.adapter, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -168,3 +168,53 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     assert_eq!(bad.status.code(), Some(1));
     assert_eq!(String::from_utf8_lossy(&bad.stderr).trim().lines().count(), 1);
 }
+
+/// `sweep` on a tiny grid writes a well-formed CSV (one row per configuration, every value a
+/// number), the Markdown table and the plot; re-running it gives the same errors.
+#[test]
+fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
+    let run = |name: &str| {
+        let dir = out_dir(name);
+        let output = cli()
+            .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
+            .args(["--ao-samples", "4,8", "--radiosity-samples", "5", "--layers", "1,2"])
+            .args(["--precision", "full", "--out"])
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+        let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
+        let png = image::open(dir.join("pareto.png")).unwrap();
+        assert_eq!((png.width(), png.height()), (900, 600));
+        assert_eq!(md.lines().filter(|l| l.starts_with("| ") && !l.contains("taps")).count(), 4);
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let rows: Vec<Vec<String>> =
+            lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+        assert_eq!(rows.len(), 4, "2 tap counts x 2 layer counts");
+        for row in &rows {
+            assert_eq!(row.len(), header.len());
+            for (h, v) in header.iter().zip(row) {
+                if *h != "precision" {
+                    let x: f64 = v.parse().unwrap_or_else(|_| panic!("{h} = {v}"));
+                    assert!(x.is_finite() && x >= 0.0, "{h} = {v}");
+                }
+            }
+        }
+        let errors: Vec<String> = rows
+            .iter()
+            .map(|r| {
+                header
+                    .iter()
+                    .zip(r)
+                    .filter(|(h, _)| h.ends_with("rmse") || h.ends_with("mae"))
+                    .map(|(_, v)| v.clone())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect();
+        errors
+    };
+    assert_eq!(run("sweep-a"), run("sweep-b"), "the same inputs give the same errors");
+}
