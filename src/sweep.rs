@@ -313,7 +313,8 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
         |e: &dyn std::fmt::Display| Error::ImageWrite { path: path.into(), message: e.to_string() };
     // Registering twice is harmless; the first registration stays.
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    let series: [(&str, RGBColor, Vec<(f64, f64)>); 2] = [
+    type Series = (&'static str, RGBColor, Vec<(f64, f64)>);
+    let series: [Series; 2] = [
         (
             "ambient obscurance",
             RGBColor(31, 119, 180),
