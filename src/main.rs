@@ -341,9 +341,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         let n = (w * h) as usize;
         let estimate: Vec<Vec3> = match args.effect {
             TruthEffect::Ao => values.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
-            TruthEffect::Indirect => {
-                values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
-            }
+            TruthEffect::Indirect => deep_gbuffer::truth::metrics::weighted_irradiance(&values, n),
         };
         let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
         let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();

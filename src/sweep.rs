@@ -3,7 +3,8 @@
 //! ([`crate::truth`]).
 //!
 //! The effects measured are the ambient visibility (against world-space obscurance with the same
-//! radius and falloff) and the radiosity irradiance of a first frame (against one-bounce
+//! radius and falloff) and the radiosity irradiance of a first frame as the composite weighs it,
+//! confidence times E (against one-bounce
 //! diffuse indirect irradiance: a first frame gathers B = direct + emission, one bounce). Each
 //! configuration renders a first frame (which warms caches and pipelines), then three more, each from an empty history, and keeps the
 //! median time of each pass; the estimate is the same every time.
@@ -132,7 +133,7 @@ pub struct Row {
     pub total_ms: f64,
     /// Obscurance error (AV after the blur).
     pub ao: ErrorStats,
-    /// Radiosity error (the irradiance the composite reads).
+    /// Radiosity error (the irradiance the composite takes from it: confidence times E).
     pub indirect: ErrorStats,
 }
 
@@ -187,7 +188,7 @@ pub fn measure(
     let av: Vec<Vec3> = av.iter().take(n).map(|v| Vec3::splat(*v)).collect();
     let radiosity = renderer.radiosity_buffers().ok_or_else(|| missing("radiosity"))?;
     let e = renderer.read_f32(device, queue, radiosity[4])?;
-    let e: Vec<Vec3> = e.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    let e = crate::truth::metrics::weighted_irradiance(&e, n);
     let passes = timings;
     Ok(Row {
         knobs: knobs.clone(),

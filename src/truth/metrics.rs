@@ -53,3 +53,11 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         estimate_mean: (em / n_f) as f32,
     }
 }
+
+/// The irradiance the composite takes from the radiosity pass: confidence (alpha) times E (rgb),
+/// of the first `n` pixels of its `vec4` buffer. The rest of the hemisphere, which no tap
+/// covered, is the ambient term's; the ground truth of diffuse indirect light leaves the sky out
+/// in the same way.
+pub fn weighted_irradiance(values: &[f32], n: usize) -> Vec<Vec3> {
+    values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2]) * c[3]).collect()
+}
