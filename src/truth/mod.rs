@@ -151,8 +151,10 @@ impl Tracer {
 
     /// World-space ambient obscurance with the obscurance kernel's radius and falloff:
     ///
-    ///     AV = clamp(1 - intensity * (1/pi) * integral over the hemisphere of
-    ///                 max(1 - d(w)^2 / r^2, 0) cos(theta) dw, 0, 1)
+    /// ```text
+    /// AV = clamp(1 - intensity * (1/pi) * integral over the hemisphere of
+    ///             max(1 - d(w)^2 / r^2, 0) cos(theta) dw, 0, 1)
+    /// ```
     ///
     /// with d(w) the distance to the first surface in direction w (any face; nothing: no
     /// obscurance). It is estimated with `spp` cosine-distributed rays per pixel, so each ray
@@ -272,7 +274,9 @@ impl Tracer {
 
     /// Diffuse indirect irradiance by path tracing, the quantity the radiosity pass estimates:
     ///
-    ///     E(X) = integral over the hemisphere of L(w) cos(theta) dw,
+    /// ```text
+    /// E(X) = integral over the hemisphere of L(w) cos(theta) dw,
+    /// ```
     ///
     /// where L is the outgoing diffuse radiance of the first surface in direction w: its emission
     /// plus its diffuse albedo (times 1 - metallic) / pi times the light arriving there, from
