@@ -53,6 +53,6 @@ pub use renderer::{Diagnostics, Renderer};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
 pub use settings::{
-    AoSettings, AtomicPath, Boost, Layer1Variant, Normalization, Precision, RadiositySettings,
-    ReflectionSettings, Settings, ShadowSettings,
+    AoSettings, AtomicPath, Boost, Layer1Variant, Normalization, Precision, Preset,
+    RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
 };

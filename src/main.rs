@@ -8,8 +8,8 @@ use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
     AoSettings, AtomicPath, Boost, Camera, Effects, Environment, Error, Layer1Variant,
-    Normalization, Precision, RadiositySettings, Renderer, Result, Scene, SceneBuffers, Settings,
-    output,
+    Normalization, Precision, Preset, RadiositySettings, Renderer, Result, Scene, SceneBuffers,
+    Settings, output,
 };
 use glam::Vec3;
 
@@ -152,9 +152,12 @@ struct RenderArgs {
     /// How layer 1 is rasterized.
     #[arg(long, value_enum, default_value_t = Layer1Variant::TwoPass)]
     layer1: Layer1Variant,
-    /// G-buffer precision.
-    #[arg(long, value_enum, default_value_t = Precision::Full)]
-    precision: Precision,
+    /// G-buffer precision (default: full, or the preset's).
+    #[arg(long, value_enum)]
+    precision: Option<Precision>,
+    /// Accuracy preset: tap counts, layers and precision (explicit options override it).
+    #[arg(long, value_enum)]
+    preset: Option<Preset>,
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
@@ -182,18 +185,18 @@ struct RenderArgs {
     /// Obscurance radius in scene units.
     #[arg(long, default_value_t = AoSettings::default().radius)]
     ao_radius: f32,
-    /// Obscurance taps per pixel.
-    #[arg(long, default_value_t = AoSettings::default().samples)]
-    ao_samples: u32,
+    /// Obscurance taps per pixel (default: 11, or the preset's).
+    #[arg(long)]
+    ao_samples: Option<u32>,
     /// Obscurance from layer 0 only (to compare with the two-layer estimator).
     #[arg(long)]
     ao_one_layer: bool,
     /// Radiosity gather radius in scene units.
     #[arg(long, default_value_t = RadiositySettings::default().radius)]
     radiosity_radius: f32,
-    /// Radiosity taps per pixel.
-    #[arg(long, default_value_t = RadiositySettings::default().samples)]
-    radiosity_samples: u32,
+    /// Radiosity taps per pixel (default: 13, or the preset's).
+    #[arg(long)]
+    radiosity_samples: Option<u32>,
     /// How the radiosity gather normalises its taps (cosine conserves energy; paper is 2 pi / M).
     #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
     normalization: Normalization,
@@ -473,23 +476,15 @@ struct TimingsFile<'a> {
 }
 
 fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
-    let settings = Settings {
+    let mut settings = Settings {
         width: args.size.0,
         height: args.size.1,
         dz: args.dz,
         layer1: args.layer1,
-        precision: args.precision,
         atomics: args.atomics,
-        ao: AoSettings {
-            enabled: !args.no_ao,
-            radius: args.ao_radius,
-            samples: args.ao_samples,
-            two_layers: !args.ao_one_layer,
-            ..AoSettings::default()
-        },
+        ao: AoSettings { enabled: !args.no_ao, radius: args.ao_radius, ..AoSettings::default() },
         radiosity: RadiositySettings {
             radius: args.radiosity_radius,
-            samples: args.radiosity_samples,
             normalization: args.normalization,
             boost: args.boost,
             ..RadiositySettings::default()
@@ -497,6 +492,21 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         effects: Effects::parse(&args.effects)?,
         ..Settings::default()
     };
+    if let Some(preset) = args.preset {
+        preset.apply(&mut settings);
+    }
+    if let Some(p) = args.precision {
+        settings.precision = p;
+    }
+    if let Some(n) = args.ao_samples {
+        settings.ao.samples = n;
+    }
+    if let Some(n) = args.radiosity_samples {
+        settings.radiosity.samples = n;
+    }
+    if args.ao_one_layer {
+        settings.ao.two_layers = false;
+    }
     settings.validate()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::InvalidSetting {

@@ -37,6 +37,43 @@ impl Precision {
     }
 }
 
+/// Named accuracy levels, chosen from the Pareto fronts that `deep-gbuffer sweep` measured on the
+/// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance and radiosity tap
+/// counts, the number of layers the effects read and the G-buffer encoding; the rest stays as
+/// given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+pub enum Preset {
+    /// 4 obscurance taps, 5 radiosity taps, layer 0 only, packed G-buffer: the cheapest point of
+    /// both fronts.
+    Low,
+    /// 4 obscurance taps, 9 radiosity taps, both layers, packed: the two-layer point of the
+    /// obscurance front (lowest error there) at little more cost.
+    Balanced,
+    /// 11 obscurance taps, 19 radiosity taps, both layers, packed.
+    High,
+    /// 32 obscurance taps, 27 radiosity taps, both layers, full-precision G-buffer.
+    Ultra,
+}
+
+impl Preset {
+    /// Applies the preset's knobs to `settings`.
+    pub fn apply(self, settings: &mut Settings) {
+        let (ao, radiosity, layers, precision) = match self {
+            Preset::Low => (4, 5, 1, Precision::Packed),
+            Preset::Balanced => (4, 9, 2, Precision::Packed),
+            Preset::High => (11, 19, 2, Precision::Packed),
+            Preset::Ultra => (32, 27, 2, Precision::Full),
+        };
+        settings.ao.samples = ao;
+        settings.ao.two_layers = layers == 2;
+        settings.radiosity.samples = radiosity;
+        // Two layers where an effect reads them (the plan decides), never forced on a scene
+        // that needs none.
+        settings.layers = if layers == 1 { 1 } else { 0 };
+        settings.precision = precision;
+    }
+}
+
 /// Which atomics the rasterizer uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
 pub enum AtomicPath {

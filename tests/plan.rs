@@ -136,3 +136,23 @@ fn the_renderer_runs_and_times_exactly_the_plan() {
         assert_eq!(timed, plan.passes, "ambient {ambient} {variant:?}");
     }
 }
+
+/// A preset sets the accuracy knobs; a two-layer preset still lets the plan drop layer 1 where
+/// no effect reads it.
+#[test]
+fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
+    use deep_gbuffer::Preset;
+    let mut low = Settings::default();
+    Preset::Low.apply(&mut low);
+    assert_eq!((low.ao.samples, low.radiosity.samples, low.layers), (4, 5, 1));
+    assert_eq!(low.precision, deep_gbuffer::Precision::Packed);
+    let mut ultra = Settings::default();
+    Preset::Ultra.apply(&mut ultra);
+    assert_eq!((ultra.ao.samples, ultra.radiosity.samples, ultra.layers), (32, 27, 0));
+    assert!(ultra.ao.two_layers);
+    for preset in [Preset::Low, Preset::Balanced, Preset::High, Preset::Ultra] {
+        let mut s = Settings::default();
+        preset.apply(&mut s);
+        s.validate().unwrap();
+    }
+}
