@@ -269,15 +269,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let ao =
         AoSettings { radius: args.ao_radius, samples: args.ao_samples, ..AoSettings::default() };
     ao.validate()?;
-    let mut scene = Scene::from_spec(&args.scene)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    scene.ensure_lights();
-    let mut camera = scene.camera_or_default();
-    if let Some(spec) = &args.camera {
-        apply_camera(&mut camera, spec)?;
-    }
+    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let bar = indicatif::ProgressBar::new(u64::from(h)).with_style(
         indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len} rows, {eta} left")
@@ -393,15 +385,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     for k in &configurations {
         k.settings(w, h).validate()?;
     }
-    let mut scene = Scene::from_spec(&args.scene)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    scene.ensure_lights();
-    let mut camera = scene.camera_or_default();
-    if let Some(spec) = &args.camera {
-        apply_camera(&mut camera, spec)?;
-    }
+    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;
@@ -430,6 +414,21 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     println!("{heading}");
     println!("{} configurations -> {}", rows.len(), args.out.display());
     Ok(())
+}
+
+/// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its camera
+/// with the `--camera` changes applied.
+fn scene_and_camera(spec: &str, camera: Option<&str>) -> Result<(Scene, Camera)> {
+    let mut scene = Scene::from_spec(spec)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    scene.ensure_lights();
+    let mut cam = scene.camera_or_default();
+    if let Some(spec) = camera {
+        apply_camera(&mut cam, spec)?;
+    }
+    Ok((scene, cam))
 }
 
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
@@ -514,15 +513,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             message: format!("{} (must be finite and > 0)", args.exposure),
         });
     }
-    let mut scene = Scene::from_spec(&args.scene)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    scene.ensure_lights();
-    let mut camera = scene.camera_or_default();
-    if let Some(spec) = &args.camera {
-        apply_camera(&mut camera, spec)?;
-    }
+    let (scene, mut camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;

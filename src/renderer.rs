@@ -1051,14 +1051,7 @@ impl Renderer {
         scene: &SceneBuffers,
         camera: &Camera,
     ) -> Result<()> {
-        gpu::scoped(device, "deep-gbuffer.frame", || {
-            let label = Some("deep-gbuffer.frame");
-            let mut encoder =
-                device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
-            self.encode(device, queue, &mut encoder, scene, camera)?;
-            queue.submit([encoder.finish()]);
-            Ok(())
-        })
+        self.submit_frame(device, queue, scene, camera, false)
     }
 
     /// Shades a deep G-buffer that the caller provides instead of rasterizing one: the layers
@@ -1131,11 +1124,23 @@ impl Renderer {
                     .collect();
             queue.write_buffer(vis, 0, bytemuck::cast_slice(&words));
         }
+        self.submit_frame(device, queue, scene, camera, true)
+    }
+
+    /// Records a frame into an encoder of its own and submits it, GPU errors caught.
+    fn submit_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        provided: bool,
+    ) -> Result<()> {
         gpu::scoped(device, "deep-gbuffer.frame", || {
             let label = Some("deep-gbuffer.frame");
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
-            self.encode_frame(device, queue, &mut encoder, scene, camera, true)?;
+            self.encode_frame(device, queue, &mut encoder, scene, camera, provided)?;
             queue.submit([encoder.finish()]);
             Ok(())
         })

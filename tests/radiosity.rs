@@ -51,23 +51,39 @@ fn first_frame_against_cpu(radiosity: RadiositySettings) {
     let r = render_frames(&scene, &[scene.camera_or_default()], settings);
     let g = gpu();
     let layers = [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
-    let [b0, b1, raw, _, _] =
-        r.renderer.radiosity_buffers().expect("radiosity runs on the Cornell box");
-    let (b0, b1, raw) = (read4(&r.renderer, b0), read4(&r.renderer, b1), read4(&r.renderer, raw));
-    let b = [
-        b0.iter().map(|v| v.truncate()).collect::<Vec<_>>(),
-        b1.iter().map(|v| v.truncate()).collect::<Vec<_>>(),
-    ];
+    let raw =
+        first_frame_matches(&r.renderer, &r.frame, [&layers[0], &layers[1]], &radiosity, "cornell");
+    let lit = raw.iter().filter(|e| e.truncate().max_element() > 0.01).count();
+    assert!(lit > raw.len() / 2, "the box receives indirect light ({lit})");
+}
+
+/// The first frame of `renderer` (no history) against the CPU reference computed on `layers`:
+/// B of layer 0 from the GPU's own direct radiance, then the gather. Returns the GPU's gathered
+/// irradiance and confidence.
+fn first_frame_matches(
+    renderer: &Renderer,
+    frame: &deep_gbuffer::gpu::FrameUniform,
+    layers: [&[deep_gbuffer::GSample]; 2],
+    radiosity: &RadiositySettings,
+    what: &str,
+) -> Vec<Vec4> {
+    let g = gpu();
+    let [b0, b1, raw, _, _] = renderer.radiosity_buffers().expect("radiosity runs");
+    let b = [b0, b1].map(|b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
+    let raw = read4(renderer, raw);
     // B without history is boosted direct + emission (direct of layer 0 checked in
     // tests/direct.rs).
-    let uniform = RadiosityUniform::new(&radiosity, false, 0);
+    let uniform = RadiosityUniform::new(radiosity, false, 0);
     let direct0 =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
-    let expected_b0 = cpu::feedback_without_history(&uniform, &layers[0], &direct0);
+        renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer().unwrap()).unwrap();
+    let expected_b0 = cpu::feedback_without_history(&uniform, layers[0], &direct0);
     for (a, e) in b[0].iter().zip(&expected_b0) {
-        assert!((*a - *e).abs().max_element() <= 1e-5 * e.max_element().max(1.0), "{a} vs {e}");
+        assert!(
+            (*a - *e).abs().max_element() <= 1e-5 * e.max_element().max(1.0),
+            "{what}: {a} vs {e}"
+        );
     }
-    let expected = cpu::gather(&r.frame, &uniform, [&layers[0], &layers[1]], [&b[0], &b[1]]);
+    let expected = cpu::gather(frame, &uniform, layers, [&b[0], &b[1]]);
     let differ = raw
         .iter()
         .zip(&expected)
@@ -77,12 +93,11 @@ fn first_frame_against_cpu(radiosity: RadiositySettings) {
         .count();
     assert!(
         (differ as f64) <= RADIOSITY_FLIPPED_FRACTION * raw.len() as f64,
-        "{differ} of {} pixels differ from the CPU gather",
+        "{what}: {differ} of {} pixels differ from the CPU gather",
         raw.len()
     );
-    let lit = raw.iter().filter(|e| e.truncate().max_element() > 0.01).count();
-    assert!(lit > raw.len() / 2, "the box receives indirect light ({lit})");
     assert!(raw.iter().all(|e| e.is_finite() && e.min_element() >= 0.0 && e.w <= 1.0));
+    raw
 }
 
 /// On a static camera, with the spiral held still, the multi-bounce feedback and the temporal
@@ -179,31 +194,6 @@ fn nan_input_never_enters_the_history() {
     );
 }
 
-/// The inside of the cube [-1, 1]^3, every face wound to face inward, with albedo `rho` and
-/// emission `le` on every face and no light.
-fn white_box(rho: f32, le: f32) -> Scene {
-    let mut triangles = Vec::new();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let (u, v) = (glam::Vec3::AXES[(axis + 1) % 3], glam::Vec3::AXES[(axis + 2) % 3]);
-            let c = glam::Vec3::AXES[axis] * sign;
-            let corners = [c - u - v, c + u - v, c + u + v, c - u + v];
-            for t in [[0, 1, 2], [0, 2, 3]] {
-                let mut tri = t.map(|i| corners[i]);
-                // Wound counter-clockwise seen from inside: the normal points to the centre.
-                if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(-c) < 0.0 {
-                    tri.swap(1, 2);
-                }
-                triangles.push(tri);
-            }
-        }
-    }
-    let mut scene = common::soup(&triangles, false);
-    scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
-    scene.materials[0].emissive = glam::Vec3::splat(le);
-    scene
-}
-
 /// Energy conservation: inside a closed box whose walls all emit Le and reflect rho, the true
 /// irradiance is the same everywhere, E = pi Le / (1 - delta rho) (the bounces sum to a
 /// geometric series, each damped by delta). With boost = 1 the multi-bounce estimate converges
@@ -212,7 +202,7 @@ fn white_box(rho: f32, le: f32) -> Scene {
 fn a_closed_white_box_converges_to_the_closed_form_and_never_exceeds_it() {
     let g = gpu();
     let (rho, le) = (0.5, 1.0);
-    let scene = white_box(rho, le);
+    let scene = common::white_box(rho, le);
     let radiosity = RadiositySettings { jitter: false, ..Default::default() };
     let closed_form = std::f32::consts::PI * le / (1.0 - radiosity.damping * rho);
     let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
@@ -263,33 +253,9 @@ fn a_closed_white_box_converges_to_the_closed_form_and_never_exceeds_it() {
 fn radiosity_of_stored_gbuffers_matches_cpu_reference() {
     for (i, (file, _)) in GBUFFER_FIXTURES.iter().enumerate() {
         let f = shade_fixture(i, settings(0, 0));
-        let g = gpu();
-        let uniform = RadiosityUniform::new(&RadiositySettings::default(), false, 0);
-        let [b0, b1, raw, _, _] = f.renderer.radiosity_buffers().expect("radiosity runs");
-        let b = [b0, b1]
-            .map(|b| read4(&f.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
-        let direct =
-            f.renderer.read_rgb(&g.device, &g.queue, f.renderer.direct_buffer().unwrap()).unwrap();
-        let expected_b0 = cpu::feedback_without_history(&uniform, &f.layers[0].samples, &direct);
-        for (a, e) in b[0].iter().zip(&expected_b0) {
-            assert!((*a - *e).abs().max_element() <= 1e-5 * e.max_element().max(1.0), "{a} vs {e}");
-        }
         let layers = [&f.layers[0].samples[..], &f.layers[1].samples[..]];
-        let expected = cpu::gather(&f.frame, &uniform, layers, [&b[0], &b[1]]);
-        let raw = read4(&f.renderer, raw);
-        let differ = raw
-            .iter()
-            .zip(&expected)
-            .filter(|(a, e)| {
-                (**a - **e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
-            })
-            .count();
-        assert!(
-            (differ as f64) <= RADIOSITY_FLIPPED_FRACTION * raw.len() as f64,
-            "{}: {differ} of {} pixels differ from the CPU gather",
-            file,
-            raw.len()
-        );
-        assert!(expected.iter().any(|e| e.truncate().max_element() > 0.01));
+        let raw =
+            first_frame_matches(&f.renderer, &f.frame, layers, &RadiositySettings::default(), file);
+        assert!(raw.iter().any(|e| e.truncate().max_element() > 0.01), "{file} is lit");
     }
 }

@@ -30,31 +30,44 @@ fn read4(r: &deep_gbuffer::Renderer, b: &wgpu::Buffer) -> Vec<Vec4> {
 fn reflective_spheres_match_cpu_reference() {
     let scene = Scene::from_spec("builtin:grid-20000").unwrap();
     let s = Settings { timings: false, ..Settings::with_size(80, 60) };
-    let uniform_settings = s.reflections.clone();
     let r = render(&scene, &scene.camera_or_default(), s);
     assert!(r.renderer.passes().iter().any(|p| p == "reflections"));
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
-    // The march reads the radiosity pass's B (direct + emission + indirect) when it runs.
-    let [b0, b1, ..] = r.renderer.radiosity_buffers().expect("the spheres are lit");
+    let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
+    assert!(reflective > 50, "the view shows reflective spheres ({reflective})");
+    march_matches(&r.renderer, &r.frame, &layer0, &r.vis1, scene.ambient, "grid");
+}
+
+/// The GPU march of `renderer`'s last frame against the CPU march on `layer0` and the layer-1
+/// visibility words `vis1`, with the radiosity pass's B as the radiance seen and the constant
+/// sky `sky`.
+fn march_matches(
+    renderer: &Renderer,
+    frame: &deep_gbuffer::gpu::FrameUniform,
+    layer0: &[deep_gbuffer::GSample],
+    vis1: &[u64],
+    sky: Vec3,
+    what: &str,
+) {
+    let [b0, b1, ..] = renderer.radiosity_buffers().expect("the scene is lit");
     let [radiance0, radiance1] =
-        [b0, b1].map(|b| read4(&r.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
+        [b0, b1].map(|b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
+    let s = &renderer.settings().reflections;
+    let (w, h) = (frame.width, frame.height);
     let uniform = ReflectionsUniform {
-        sky: scene.ambient.to_array(),
-        max_distance: uniform_settings.max_distance,
-        thickness: uniform_settings.thickness,
-        tiles_x: 10,
-        tiles_y: 8,
+        sky: sky.to_array(),
+        max_distance: s.max_distance,
+        thickness: s.thickness,
+        tiles_x: w.div_ceil(8),
+        tiles_y: h.div_ceil(8),
         env_width: 0,
         env_height: 0,
         with_emission: 1,
         _pad: [0; 2],
     };
-    let expected =
-        cpu::reflections(&r.frame, &uniform, &layer0, &r.vis1, [&radiance0, &radiance1], None);
-    let actual = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
-    let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
-    assert!(reflective > 50, "the view shows reflective spheres ({reflective})");
+    let expected = cpu::reflections(frame, &uniform, layer0, vis1, [&radiance0, &radiance1], None);
+    let actual = read4(renderer, renderer.reflections_buffer().unwrap());
     let differ = actual
         .iter()
         .zip(&expected)
@@ -62,11 +75,11 @@ fn reflective_spheres_match_cpu_reference() {
         .count();
     assert!(
         (differ as f64) <= FLIPPED_FRACTION * actual.len() as f64,
-        "{differ} pixels differ from the CPU march"
+        "{what}: {differ} pixels differ from the CPU march"
     );
     assert!(actual.iter().all(|v| v.is_finite()));
     let hits = expected.iter().filter(|v| v.w > 0.5).count();
-    assert!(hits > 10, "some rays hit neighbouring spheres or the ground ({hits})");
+    assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
 }
 
 /// A mirror floor (reflectivity 1, black) and a glowing red wall standing on it, seen from
@@ -313,10 +326,6 @@ fn missed_rays_see_the_environment_map() {
 fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
     let f = shade_fixture(1, Settings { timings: false, ..Settings::default() });
     assert_eq!(GBUFFER_FIXTURES[1].1, "builtin:grid-20000");
-    let (w, h) = (f.layers[0].width, f.layers[0].height);
-    let [b0, b1, ..] = f.renderer.radiosity_buffers().expect("the spheres are lit");
-    let [radiance0, radiance1] =
-        [b0, b1].map(|b| read4(&f.renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
     let vis1: Vec<u64> = f.layers[1]
         .samples
         .iter()
@@ -328,35 +337,12 @@ fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
             }
         })
         .collect();
-    let s = Settings::default().reflections;
-    let uniform = ReflectionsUniform {
-        sky: f.scene.ambient.to_array(),
-        max_distance: s.max_distance,
-        thickness: s.thickness,
-        tiles_x: w.div_ceil(8),
-        tiles_y: h.div_ceil(8),
-        env_width: 0,
-        env_height: 0,
-        with_emission: 1,
-        _pad: [0; 2],
-    };
-    let expected = cpu::reflections(
+    march_matches(
+        &f.renderer,
         &f.frame,
-        &uniform,
         &f.layers[0].samples,
         &vis1,
-        [&radiance0, &radiance1],
-        None,
+        f.scene.ambient,
+        GBUFFER_FIXTURES[1].0,
     );
-    let actual = read4(&f.renderer, f.renderer.reflections_buffer().unwrap());
-    let differ = actual
-        .iter()
-        .zip(&expected)
-        .filter(|(a, e)| (**a - **e).abs().max_element() > 1e-3 * e.max_element().max(1.0))
-        .count();
-    assert!(
-        (differ as f64) <= FLIPPED_FRACTION * actual.len() as f64,
-        "{differ} pixels differ from the CPU march"
-    );
-    assert!(expected.iter().filter(|v| v.w > 0.5).count() > 10, "some rays hit");
 }

@@ -130,24 +130,7 @@ fn invalid_truth_requests_are_refused() {
 #[test]
 fn indirect_light_in_a_closed_white_box_has_the_closed_form() {
     let (rho, le) = (0.5f32, 1.0f32);
-    let mut triangles = Vec::new();
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
-            let c = Vec3::AXES[axis] * sign;
-            let corners = [c - u - v, c + u - v, c + u + v, c - u + v];
-            for t in [[0, 1, 2], [0, 2, 3]] {
-                let mut tri = t.map(|i| corners[i]);
-                if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(-c) < 0.0 {
-                    tri.swap(1, 2);
-                }
-                triangles.push(tri);
-            }
-        }
-    }
-    let mut scene = soup(&triangles, false);
-    scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
-    scene.materials[0].emissive = Vec3::splat(le);
+    let scene = common::white_box(rho, le);
     let camera =
         Camera::perspective(Vec3::new(0.3, 0.2, 0.6), Vec3::new(-1.0, -0.8, -1.0), 70.0, 0.01);
     let tracer = Tracer::new(&scene).unwrap();

@@ -110,3 +110,28 @@ pub fn shade_fixture(index: usize, settings: Settings) -> Shaded {
     let frame = *renderer.frame_uniform().expect("a frame was encoded");
     Shaded { scene, layers, frame, renderer }
 }
+
+/// The inside of the cube [-1, 1]^3, every face wound to face inward, with albedo `rho` and
+/// emission `le` on every face and no light.
+pub fn white_box(rho: f32, le: f32) -> Scene {
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let (u, v) = (glam::Vec3::AXES[(axis + 1) % 3], glam::Vec3::AXES[(axis + 2) % 3]);
+            let c = glam::Vec3::AXES[axis] * sign;
+            let corners = [c - u - v, c + u - v, c + u + v, c - u + v];
+            for t in [[0, 1, 2], [0, 2, 3]] {
+                let mut tri = t.map(|i| corners[i]);
+                // Wound counter-clockwise seen from inside: the normal points to the centre.
+                if (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(-c) < 0.0 {
+                    tri.swap(1, 2);
+                }
+                triangles.push(tri);
+            }
+        }
+    }
+    let mut scene = soup(&triangles, false);
+    scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
+    scene.materials[0].emissive = glam::Vec3::splat(le);
+    scene
+}
