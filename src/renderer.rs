@@ -127,7 +127,6 @@ struct RadiosityStage {
     last: usize,
     /// Frames since the history began.
     turn: u32,
-    prev_vis1: wgpu::Buffer,
     blur: BlurPass,
     /// The blur's intermediate and result.
     blurred: [wgpu::Buffer; 2],
@@ -168,7 +167,6 @@ impl RadiosityStage {
             ],
             last: 0,
             turn: 0,
-            prev_vis1: buffer("deep-gbuffer.radiosity.prev_vis1", pixels * 8),
             blur: BlurPass::new(device, s.precision, s.radiosity.blur_radius, true),
             blurred: [
                 buffer("deep-gbuffer.radiosity.blur", pixels * 16),
@@ -868,7 +866,7 @@ impl Renderer {
                 b: [&r.b[0], &r.b[1]],
                 raw: &r.raw,
                 history: [&r.history[r.last], &r.history[1 - r.last]],
-                prev_vis: [prev_vis0, &r.prev_vis1],
+                prev_vis0,
             };
             {
                 let mut pass = begin(encoder, "radiosity");
@@ -956,7 +954,6 @@ impl Renderer {
             t.resolve(encoder);
         }
         if let Some(r) = self.radiosity.as_mut().filter(|_| plan.radiosity == Reason::Runs) {
-            encoder.copy_buffer_to_buffer(&self.vis1, 0, &r.prev_vis1, 0, self.vis1.size());
             r.last = 1 - r.last;
         }
         debug_assert_eq!(passes, plan.passes, "the recorded passes are the plan's");

@@ -171,7 +171,8 @@ pub struct RadiositySettings {
     /// Weight alpha in [0, 1) of the history in the temporal filter.
     pub alpha: f32,
     /// History is kept where the reprojected point lies within this distance (scene units,
-    /// along the previous view axis) of either previous layer.
+    /// along the previous view axis) of the previous layer 0, whose irradiance the history
+    /// holds (a point hidden last frame has no history).
     pub history_tolerance: f32,
     /// Count a tap only if its surface faces the gathering point (w.n_Y < 0).
     pub normal_test: bool,

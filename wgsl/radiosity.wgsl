@@ -14,7 +14,9 @@
 //   (src/settings.rs, Normalization, says why the default differs). The confidence M / N is kept
 //   in alpha.
 // radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha where the reprojected point lies within
-//   `tolerance` (view depth, scene units) of either layer of the previous frame; otherwise E.
+//   `tolerance` (view depth, scene units) of the previous frame's layer 0; otherwise E. The
+//   history holds layer 0's irradiance only, so a point that was hidden (in layer 1, or not at
+//   all) has none: taking the layer-0 value there would paint the surface that covered it.
 //   Non-finite values never enter the history.
 // src/cpu/radiosity.rs is the same on the CPU.
 // defines: PACKED
@@ -66,7 +68,6 @@ fn boost(rho: vec3<f32>) -> f32 {
 @group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> history_out: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> prev_vis0: array<u32>;
-@group(0) @binding(12) var<storage, read> prev_vis1: array<u32>;
 
 fn sample0(p: u32) -> GSample {
 #if PACKED
@@ -102,11 +103,9 @@ fn history_at(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
     let d = -mat_mul(frame.prev_view, world).z;
     let z0 = prev_vis0[2u * q + 1u];
-    let z1 = prev_vis1[2u * q + 1u];
     let near0 = z0 != VIS_EMPTY && abs(d - bitcast<f32>(z0)) <= params.tolerance;
-    let near1 = z1 != VIS_EMPTY && abs(d - bitcast<f32>(z1)) <= params.tolerance;
     let h = history_in[q];
-    if !(near0 || near1) || !finite3(h.rgb) {
+    if !near0 || !finite3(h.rgb) {
         return vec4<f32>(0.0);
     }
     return vec4<f32>(h.rgb, 1.0);

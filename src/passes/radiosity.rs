@@ -17,7 +17,7 @@ pub struct RadiosityUniform {
     pub damping: f32,
     /// Weight of the history in the temporal filter.
     pub alpha: f32,
-    /// History kept where the reprojected point is within this view depth of either layer.
+    /// History kept where the reprojected point is within this view depth of the previous layer 0.
     pub tolerance: f32,
     /// 1: a tap counts only if it faces the gathering point.
     pub normal_test: u32,
@@ -75,8 +75,8 @@ pub struct RadiosityTargets<'a> {
     pub raw: &'a wgpu::Buffer,
     /// Last frame's filtered irradiance, and this frame's.
     pub history: [&'a wgpu::Buffer; 2],
-    /// Last frame's visibility buffers (depth for the history test).
-    pub prev_vis: [&'a wgpu::Buffer; 2],
+    /// Last frame's layer-0 visibility buffer (depth for the history test).
+    pub prev_vis0: &'a wgpu::Buffer,
 }
 
 /// The three radiosity kernels.
@@ -115,8 +115,7 @@ impl RadiosityPass {
             (6, t.b[0]),
             (7, t.b[1]),
             (9, t.history[0]),
-            (11, t.prev_vis[0]),
-            (12, t.prev_vis[1]),
+            (11, t.prev_vis0),
         ];
         let gather = [
             (0, t.frame),
@@ -147,8 +146,7 @@ impl RadiosityPass {
             (8, t.raw),
             (9, t.history[0]),
             (10, t.history[1]),
-            (11, t.prev_vis[0]),
-            (12, t.prev_vis[1]),
+            (11, t.prev_vis0),
         ];
         gpu::dispatch_pixels(
             device,

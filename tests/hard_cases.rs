@@ -1,0 +1,411 @@
+//! Hard cases through the whole pipeline: every case renders frames on the test device and checks
+//! that no output or history buffer holds a NaN or an infinity, that AV lies in [0, 1], and that
+//! radiance and irradiance are never negative.
+
+mod common;
+
+use common::{gpu, mesh, soup};
+use deep_gbuffer::scene::Projection;
+use deep_gbuffer::{
+    AoSettings, Camera, RadiositySettings, Renderer, Scene, SceneBuffers, Settings,
+};
+use glam::{Vec3, Vec4};
+
+/// What one checked frame showed.
+struct Checked {
+    /// Pixels with a layer-0 surface.
+    surfaces: usize,
+    renderer: Renderer,
+}
+
+fn vec4s(r: &Renderer, b: &wgpu::Buffer) -> Vec<Vec4> {
+    let g = gpu();
+    let n = (r.settings().width * r.settings().height) as usize;
+    let v = r.read_f32(&g.device, &g.queue, b).unwrap();
+    v.chunks_exact(4).take(n).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect()
+}
+
+/// Checks every buffer the last frame of `r` wrote.
+fn check_buffers(r: &Renderer, what: &str) -> usize {
+    let g = gpu();
+    let n = (r.settings().width * r.settings().height) as usize;
+    let finite_nonneg = |name: &str, v: &[Vec4]| {
+        for (p, x) in v.iter().enumerate() {
+            assert!(x.is_finite(), "{what}: {name} pixel {p} is {x}");
+            assert!(x.truncate().min_element() >= 0.0, "{what}: {name} pixel {p} is {x}");
+        }
+    };
+    let hdr = vec4s(r, r.hdr_buffer().expect("a frame"));
+    finite_nonneg("hdr", &hdr);
+    if let Some(b) = r.direct_buffer() {
+        finite_nonneg("direct", &vec4s(r, b));
+    }
+    if let Some(av) = r.ao_buffer() {
+        let av = r.read_f32(&g.device, &g.queue, av).unwrap();
+        for (p, v) in av.iter().take(n).enumerate() {
+            assert!((0.0..=1.0).contains(v), "{what}: AV {v} at pixel {p}");
+        }
+    }
+    if let Some(buffers) = r.radiosity_buffers() {
+        for (name, b) in ["b0", "b1", "raw", "history", "blurred"].iter().zip(buffers) {
+            let v = vec4s(r, b);
+            finite_nonneg(name, &v);
+            assert!(v.iter().all(|x| x.w <= 1.0), "{what}: {name} confidence above 1");
+        }
+    }
+    if let Some(b) = r.reflections_buffer() {
+        finite_nonneg("reflections", &vec4s(r, b));
+    }
+    let layer0 = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    for s in &layer0.samples {
+        assert!(s.depth.is_finite() && s.depth >= 0.0, "{what}: depth {}", s.depth);
+        if s.depth > 0.0 {
+            assert!((s.normal.length() - 1.0).abs() < 1e-3, "{what}: normal {}", s.normal);
+        }
+    }
+    layer0.samples.iter().filter(|s| s.depth > 0.0).count()
+}
+
+/// Renders `frames` frames of `scene` from `camera` and checks each.
+fn check(scene: &Scene, camera: &Camera, settings: Settings, frames: u32, what: &str) -> Checked {
+    let g = gpu();
+    let buffers = SceneBuffers::upload(&g.device, scene).unwrap();
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+    let mut surfaces = 0;
+    for _ in 0..frames {
+        renderer.render(&g.device, &g.queue, &buffers, camera).unwrap();
+        surfaces = check_buffers(&renderer, what);
+    }
+    Checked { surfaces, renderer }
+}
+
+/// 32x24 with 128-texel shadow faces (the Cornell box's point light draws six per frame).
+fn small() -> Settings {
+    let shadows = deep_gbuffer::ShadowSettings { resolution: 128, ..Default::default() };
+    Settings { timings: false, shadows, ..Settings::with_size(32, 24) }
+}
+
+fn cornell() -> (Scene, Camera) {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    (scene, camera)
+}
+
+#[test]
+fn projections() {
+    let (scene, base) = cornell();
+    let perspective = |fov_y_deg, near, far, reverse_z| Camera {
+        projection: Projection::Perspective { fov_y_deg, near, far, reverse_z },
+        ..base.clone()
+    };
+    let cases = [
+        (
+            "orthographic",
+            Camera {
+                projection: Projection::Orthographic { height: 2.5, near: 0.1, far: 20.0 },
+                ..base.clone()
+            },
+        ),
+        ("reverse-z", perspective(40.0, 0.1, Some(50.0), true)),
+        ("reverse-z infinite", perspective(40.0, 0.1, None, true)),
+        ("infinite far plane", perspective(40.0, 0.1, None, false)),
+        ("5 degrees", perspective(5.0, 0.1, Some(50.0), false)),
+        ("120 degrees", perspective(120.0, 0.1, Some(50.0), false)),
+        ("far/near 1e6", perspective(40.0, 1e-4, Some(100.0), false)),
+    ];
+    for (what, camera) in cases {
+        let c = check(&scene, &camera, small(), 2, what);
+        assert!(c.surfaces > 0, "{what}: the box is in view");
+    }
+}
+
+#[test]
+fn cameras_inside_on_and_away_from_geometry() {
+    let (scene, base) = cornell();
+    // Inside the tall box (its centre is about (-0.33, 0.6, -0.29) in the Cornell box).
+    let inside = Camera { eye: Vec3::new(-0.33, 0.6, -0.29), ..base.clone() };
+    check(&scene, &inside, small(), 2, "inside a box");
+    // Exactly on the floor (y = 0), looking along it.
+    let on = Camera::perspective(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, -1.0), 60.0, 0.01);
+    check(&scene, &on, small(), 2, "on the floor");
+    // Looking away from everything.
+    let away = Camera::perspective(Vec3::new(0.0, 1.0, 5.0), Vec3::new(0.0, 1.0, 10.0), 60.0, 0.1);
+    let c = check(&scene, &away, small(), 2, "an empty view");
+    assert_eq!(c.surfaces, 0);
+}
+
+#[test]
+fn one_triangle_and_an_edge_on_triangle() {
+    let tri = [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+    let mut scene = soup(&[tri], false);
+    scene.ensure_lights();
+    let facing = Camera::perspective(Vec3::new(0.0, 0.5, 2.0), Vec3::new(0.0, 0.5, 0.0), 60.0, 0.1);
+    let c = check(&scene, &facing, small(), 2, "one triangle");
+    assert!(c.surfaces > 0);
+    // Seen exactly edge-on: the triangle lies in the plane z = 0 and the eye too.
+    let edge_on =
+        Camera::perspective(Vec3::new(3.0, 0.5, 0.0), Vec3::new(0.0, 0.5, 0.0), 60.0, 0.1);
+    let c = check(&scene, &edge_on, small(), 2, "an edge-on triangle");
+    assert_eq!(c.surfaces, 0, "an edge-on triangle covers no pixel centre");
+}
+
+#[test]
+fn bad_normals_and_coincident_triangles() {
+    let (mut scene, camera) = cornell();
+    // Zero-length and NaN vertex normals: the resolve falls back to the face normal.
+    let n = scene.normals.len();
+    for (i, normal) in scene.normals.iter_mut().enumerate() {
+        *normal = match i % 3 {
+            0 => Vec3::ZERO,
+            1 => Vec3::NAN,
+            _ => *normal,
+        };
+    }
+    assert_eq!(scene.normals.len(), n);
+    check(&scene, &camera, small(), 2, "zero and NaN normals");
+
+    // Two coincident coplanar quads with different materials: one wins everywhere, the same on
+    // every run.
+    let quad = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let mut scene = mesh(&quad, &[0, 1, 2, 0, 2, 3, 0, 1, 2, 0, 2, 3], false);
+    scene.materials.push(deep_gbuffer::scene::Material {
+        base_color: Vec4::new(1.0, 0.0, 0.0, 1.0),
+        ..Default::default()
+    });
+    scene.triangle_materials[2] = 1;
+    scene.triangle_materials[3] = 1;
+    scene.ensure_lights();
+    let camera = Camera::perspective(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 50.0, 0.1);
+    let a = check(&scene, &camera, small(), 1, "coincident quads");
+    let b = check(&scene, &camera, small(), 1, "coincident quads again");
+    let g = gpu();
+    let ha = a.renderer.read_rgb(&g.device, &g.queue, a.renderer.hdr_buffer().unwrap()).unwrap();
+    let hb = b.renderer.read_rgb(&g.device, &g.queue, b.renderer.hdr_buffer().unwrap()).unwrap();
+    assert_eq!(ha, hb, "the same winner on every run");
+}
+
+/// A thin pole two units in front of a wall, obscurance radius 0.5: no tap on the pole is within
+/// the radius of the wall, so the wall shows no halo around the pole, with one layer or two.
+#[test]
+fn a_thin_pole_casts_no_halo_on_the_wall_behind() {
+    let mut triangles = Vec::new();
+    let wall = [
+        [Vec3::new(-5.0, -5.0, 0.0), Vec3::new(5.0, -5.0, 0.0), Vec3::new(5.0, 5.0, 0.0)],
+        [Vec3::new(-5.0, -5.0, 0.0), Vec3::new(5.0, 5.0, 0.0), Vec3::new(-5.0, 5.0, 0.0)],
+    ];
+    triangles.extend(wall);
+    // A square pole 0.1 wide, from z = 1.95 to 2.05, standing from y = -5 to 5.
+    let (a, b) = (-0.05f32, 0.05f32);
+    for (x0, z0, x1, z1) in
+        [(a, b + 2.0, b, b + 2.0), (b, b + 2.0, b, a + 2.0), (a, a + 2.0, a, b + 2.0)]
+    {
+        let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        triangles.push([p(x0, -5.0, z0), p(x1, -5.0, z1), p(x1, 5.0, z1)]);
+        triangles.push([p(x0, -5.0, z0), p(x1, 5.0, z1), p(x0, 5.0, z0)]);
+    }
+    let mut scene = soup(&triangles, true);
+    scene.ambient = Vec3::splat(0.3);
+    let camera = Camera::perspective(Vec3::new(0.3, 0.0, 6.0), Vec3::ZERO, 40.0, 0.1);
+    let g = gpu();
+    for two_layers in [true, false] {
+        let ao = AoSettings { radius: 0.5, two_layers, blur_radius: 0, ..Default::default() };
+        let c = check(&scene, &camera, Settings { ao, ..small() }, 1, "pole");
+        let layer0 = c.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+        let av = c.renderer.read_f32(&g.device, &g.queue, c.renderer.ao_buffer().unwrap()).unwrap();
+        let wall: Vec<f32> = layer0
+            .samples
+            .iter()
+            .zip(&av)
+            .filter(|(s, _)| s.depth > 5.9)
+            .map(|(_, v)| *v)
+            .collect();
+        assert!(wall.len() > 100);
+        let min = wall.iter().copied().fold(1.0, f32::min);
+        assert_eq!(min, 1.0, "two layers: {two_layers}: the wall is not obscured (min AV {min})");
+    }
+}
+
+#[test]
+fn mirrors_facing_the_camera_and_at_grazing_angles() {
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    for m in &mut scene.materials {
+        m.reflectivity = 1.0;
+        m.roughness = 0.0;
+    }
+    let camera = scene.camera_or_default();
+    // Every surface a mirror: rays toward the camera (the back wall), grazing (floor and walls
+    // seen at an angle) and leaving the screen; each ends within its 48 steps.
+    let c = check(&scene, &camera, small(), 2, "all mirrors");
+    assert!(c.renderer.passes().iter().any(|p| p == "reflections"));
+    let grazing =
+        Camera::perspective(Vec3::new(0.0, 0.02, 1.5), Vec3::new(0.0, 0.0, -1.0), 60.0, 0.01);
+    check(&scene, &grazing, small(), 2, "grazing mirrors");
+}
+
+#[test]
+fn scene_scales_from_a_thousandth_to_a_hundred_thousand() {
+    let (scene, camera) = cornell();
+    for scale in [1e-3f32, 1e5] {
+        let mut s = scene.clone();
+        for p in &mut s.positions {
+            *p *= scale;
+        }
+        for l in &mut s.lights {
+            if let deep_gbuffer::scene::LightKind::Point { position, .. } = &mut l.kind {
+                *position *= scale;
+            }
+            l.intensity *= scale * scale;
+        }
+        let mut cam = camera.clone();
+        cam.eye *= scale;
+        cam.target *= scale;
+        if let Projection::Perspective { near, .. } = &mut cam.projection {
+            *near *= scale;
+        }
+        let settings = Settings {
+            dz: 0.05 * scale,
+            ao: AoSettings { radius: 0.5 * scale, bias: 0.01 * scale, ..Default::default() },
+            radiosity: RadiositySettings {
+                radius: scale,
+                history_tolerance: 0.01 * scale,
+                ..Default::default()
+            },
+            ..small()
+        };
+        let c = check(&s, &cam, settings, 3, &format!("scale {scale}"));
+        assert!(c.surfaces > 300, "scale {scale}: {} surfaces", c.surfaces);
+    }
+}
+
+#[test]
+fn tiny_and_odd_resolutions() {
+    let (scene, camera) = cornell();
+    for (w, h) in [(1, 1), (7, 5), (2, 1), (1, 9)] {
+        let c = check(
+            &scene,
+            &camera,
+            Settings { timings: false, ..Settings::with_size(w, h) },
+            2,
+            &format!("{w}x{h}"),
+        );
+        assert!(c.surfaces <= (w * h) as usize);
+    }
+}
+
+/// 3840x2160 through the whole pipeline: finite everywhere where the device can hold a layer in
+/// one storage binding; where it cannot (lavapipe allows 128 MiB, a full-precision layer needs
+/// 506 MiB), a typed error that names the layer, what it needs and the limit.
+#[test]
+fn ultra_hd() {
+    let (scene, camera) = cornell();
+    let g = gpu();
+    let (w, h) = (3840u32, 2160u32);
+    let needed = u64::from(w) * u64::from(h) * 64;
+    let limit = g.device.limits().max_storage_buffer_binding_size;
+    let settings = Settings { timings: false, ..Settings::with_size(w, h) };
+    if needed > limit {
+        match Renderer::new(&g.device, &g.queue, settings) {
+            Err(deep_gbuffer::Error::ExceedsLimit { what, needed: n, limit: l }) => {
+                assert!(what.contains("3840x2160"), "{what}");
+                assert_eq!((n, l), (needed, limit));
+            }
+            other => panic!("{:?}", other.map(|_| ())),
+        }
+    } else {
+        let c = check(&scene, &camera, settings, 1, "3840x2160");
+        assert!(c.surfaces > (w * h / 2) as usize);
+    }
+}
+
+#[test]
+fn extreme_layer_separation_and_one_sample() {
+    let (scene, camera) = cornell();
+    for dz in [0.0, 1e6] {
+        let c =
+            check(&scene, &camera, Settings { dz, layers: 2, ..small() }, 2, &format!("dz {dz}"));
+        let layer1 = c.renderer.read_gbuffer(&gpu().device, &gpu().queue, 1).unwrap();
+        if dz > 1e5 {
+            assert!(layer1.samples.iter().all(|s| s.depth == 0.0), "nothing lies 1e6 behind");
+        }
+    }
+    let one = Settings {
+        ao: AoSettings { samples: 1, ..Default::default() },
+        radiosity: RadiositySettings { samples: 1, ..Default::default() },
+        ..small()
+    };
+    check(&scene, &camera, one, 3, "one sample");
+    // A radius of zero is no setting at all: refused with its name.
+    let zero = Settings { ao: AoSettings { radius: 0.0, ..Default::default() }, ..small() };
+    match Renderer::new(&gpu().device, &gpu().queue, zero) {
+        Err(deep_gbuffer::Error::InvalidSetting { name, .. }) => assert_eq!(name, "ao.radius"),
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+}
+
+/// Temporal: a first frame, a camera cut, and an object that moves away and uncovers the
+/// background: the history is dropped where the uncovered surface was not seen, no NaN appears,
+/// and the uncovered pixels end up as a fresh render of the new scene shows them.
+#[test]
+fn temporal_cut_and_an_object_moving_away() {
+    let g = gpu();
+    let (scene, camera) = cornell();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let radiosity = RadiositySettings { jitter: false, ..Default::default() };
+    let settings = Settings { radiosity, ..small() };
+    let mut r = Renderer::new(&g.device, &g.queue, settings.clone()).unwrap();
+    for _ in 0..5 {
+        r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        check_buffers(&r, "before the cut");
+    }
+    r.reset_history();
+    let far = Camera { eye: camera.eye + Vec3::new(0.5, 0.2, 1.0), ..camera.clone() };
+    r.render(&g.device, &g.queue, &buffers, &far).unwrap();
+    check_buffers(&r, "after the cut");
+
+    // Move the short box (the material "shortBox") 5 units away: the floor under it appears.
+    let mut moved = scene.clone();
+    let short = moved.materials.iter().position(|m| m.name == "shortBox").unwrap() as u32;
+    let mut vertices = std::collections::BTreeSet::new();
+    for (t, m) in moved.triangles.iter().zip(&moved.triangle_materials) {
+        if *m == short {
+            vertices.extend(t.iter().copied());
+        }
+    }
+    for v in vertices {
+        moved.positions[v as usize].x += 5.0;
+    }
+    let moved_buffers = SceneBuffers::upload(&g.device, &moved).unwrap();
+    // The first frame after the move: where the box was and the floor now shows, the history
+    // (the box's irradiance) must be dropped, so the filtered irradiance is this frame's own.
+    let before = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let before_cut = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    assert_eq!(before.width, before_cut.width);
+    r.render(&g.device, &g.queue, &moved_buffers, &camera).unwrap();
+    check_buffers(&r, "the box moved away");
+    let after = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let [.., raw, history, _] = r.radiosity_buffers().unwrap();
+    let (raw, history) = (vec4s(&r, raw), vec4s(&r, history));
+    let mut uncovered = 0;
+    for p in 0..after.samples.len() {
+        let (was, now) = (&before_cut.samples[p], &after.samples[p]);
+        // Uncovered, and farther than the history tolerance from what covered it (where the box
+        // meets the floor the two surfaces are within it, and the history rightly stays).
+        let tolerance = RadiositySettings::default().history_tolerance;
+        let gone = was.depth > 0.0 && was.material == short;
+        if gone && now.depth > 0.0 && now.material != short && now.depth - was.depth > tolerance {
+            uncovered += 1;
+            assert_eq!(
+                history[p].truncate(),
+                raw[p].truncate(),
+                "pixel {p} kept the box's history"
+            );
+        }
+    }
+    assert!(uncovered > 5, "the move uncovers floor ({uncovered} pixels)");
+}
