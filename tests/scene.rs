@@ -211,6 +211,43 @@ fn malformed_gltf_names_the_problem() {
     assert!(text.contains("unknown scene format"), "{text}");
 }
 
+/// glTF URIs that leave the scene's folder, or the machine, are refused before anything is
+/// read; relative files inside the folder and data: URIs load.
+#[test]
+fn gltf_uris_outside_the_folder_or_on_the_network_are_refused() {
+    let dir = temp_dir("uris");
+    let doc = |uri: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"uri": "{uri}", "byteLength": 36}}],
+      "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+      "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}}],
+      "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}], "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}]}}"#
+        )
+    };
+    for (uri, expect) in [
+        ("../secret.bin", "outside"),
+        ("a/../../secret.bin", "outside"),
+        ("%2e%2e/secret.bin", "outside"),
+        ("/etc/passwd", "absolute"),
+        ("C:/Windows/win.ini", "absolute"),
+        ("http://example.com/tri.bin", "http:"),
+        ("https://example.com/tri.bin", "https:"),
+        ("file:///etc/passwd", "file:"),
+    ] {
+        let text = error_text(Scene::load(&write(&dir, "uri.gltf", &doc(uri))));
+        assert!(text.contains("buffers[0].uri") && text.contains(expect), "{uri}: {text}");
+    }
+    // Inside the folder: a relative file one level down loads.
+    let triangle: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::create_dir_all(dir.join("bin")).unwrap();
+    std::fs::write(dir.join("bin/tri.bin"), triangle).unwrap();
+    let scene = Scene::load(&write(&dir, "inside.gltf", &doc("bin/../bin/tri.bin"))).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+}
+
 #[test]
 fn invalid_scenes_are_refused_with_the_cause() {
     let mut scene = Scene::from_spec("builtin:cornell").unwrap();

@@ -268,6 +268,65 @@ pub(crate) fn load_texture_file(path: &Path) -> Result<Texture> {
 
 /// Checks the mesh references the `gltf` crate's validation may index without checking
 /// (attribute, index and material ids), so the error names the exact place.
+/// A glTF URI is followed only if it is embedded data (`data:`) or a relative path that stays
+/// inside the scene's folder: network addresses, other schemes, absolute paths and paths that
+/// climb out with `..` (also percent-encoded) are refused before anything is read.
+fn check_uri(uri: &str) -> std::result::Result<(), String> {
+    if uri.starts_with("data:") {
+        return Ok(());
+    }
+    let decoded = percent_decode(uri);
+    let scheme = decoded.split_once(':').map(|(s, _)| s);
+    if let Some(s) = scheme
+        && s.len() > 1
+        && s.chars().all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+    {
+        return Err(format!(
+            "`{uri}`: a `{s}:` address is refused (only relative files and data: URIs)"
+        ));
+    }
+    let windows_drive = decoded.len() >= 2 && decoded.as_bytes()[1] == b':';
+    if decoded.starts_with('/') || decoded.starts_with('\\') || windows_drive {
+        return Err(format!(
+            "`{uri}`: an absolute path is refused (only paths inside the scene's folder)"
+        ));
+    }
+    let mut depth = 0i32;
+    for part in decoded.split(['/', '\\']) {
+        match part {
+            "" | "." => {}
+            ".." => {
+                depth -= 1;
+                if depth < 0 {
+                    return Err(format!("`{uri}` points outside the scene's folder: refused"));
+                }
+            }
+            _ => depth += 1,
+        }
+    }
+    Ok(())
+}
+
+/// `%XX` escapes decoded (invalid escapes kept as they are).
+fn percent_decode(s: &str) -> String {
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok());
+        if bytes[i] == b'%'
+            && let Some(v) = hex.and_then(|h| u8::from_str_radix(h, 16).ok())
+        {
+            out.push(v);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
 fn precheck(path: &Path) -> Result<()> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let json_bytes: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
@@ -280,6 +339,14 @@ fn precheck(path: &Path) -> Result<()> {
     };
     // Syntax errors are left to the real parser, which names line and column.
     let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&json_bytes) else { return Ok(()) };
+    for key in ["buffers", "images"] {
+        let list = doc.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
+        for (i, item) in list.iter().enumerate() {
+            if let Some(uri) = item.get("uri").and_then(|u| u.as_str()) {
+                check_uri(uri).map_err(|m| Error::format(path, format!("{key}[{i}].uri"), m))?;
+            }
+        }
+    }
     let count = |key: &str| doc.get(key).and_then(|v| v.as_array()).map_or(0, Vec::len) as u64;
     let (accessors, materials) = (count("accessors"), count("materials"));
     let meshes = doc.get("meshes").and_then(|m| m.as_array()).cloned().unwrap_or_default();
