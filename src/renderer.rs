@@ -65,6 +65,8 @@ pub struct Renderer {
     plan: Option<Plan>,
     /// The environment map (texels, width, height) missed reflection rays see.
     environment: Option<(wgpu::Buffer, u32, u32)>,
+    /// The last frame [`render`](Renderer::render) submitted, still perhaps on the GPU.
+    in_flight: Option<wgpu::SubmissionIndex>,
 }
 
 /// Reflections: the kernels, the tile list, its indirect arguments and the reflected radiance.
@@ -449,6 +451,7 @@ impl Renderer {
             present: None,
             plan: None,
             environment: None,
+            in_flight: None,
             settings,
         })
     }
@@ -1138,7 +1141,18 @@ impl Renderer {
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
             self.encode_frame(device, queue, &mut encoder, scene, camera, provided)?;
-            queue.submit([encoder.finish()]);
+            let index = queue.submit([encoder.finish()]);
+            // At most two frames in flight: wait for the one before. This also lets the device
+            // free what finished frames used; without it a loop of renders that never polls
+            // keeps every frame's transient objects alive.
+            if let Some(previous) = self.in_flight.replace(index) {
+                device
+                    .poll(wgpu::PollType::Wait { submission_index: Some(previous), timeout: None })
+                    .map_err(|e| Error::Gpu {
+                        label: "deep-gbuffer.frame".into(),
+                        message: e.to_string(),
+                    })?;
+            }
             Ok(())
         })
     }

@@ -11,8 +11,15 @@ use common::gpu;
 use deep_gbuffer::{Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::{Quat, Vec3};
 
-const FRAMES: u32 = 10_000;
-const WINDOW: u32 = 1_000;
+/// Frames per run: 10,000, or `DEEP_GBUFFER_LONG_RUN_FRAMES`.
+fn frames() -> u32 {
+    std::env::var("DEEP_GBUFFER_LONG_RUN_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10_000)
+}
+
+const WINDOW: u32 = 500;
 
 fn resident_bytes() -> Option<u64> {
     let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
@@ -20,7 +27,7 @@ fn resident_bytes() -> Option<u64> {
     Some(pages * 4096)
 }
 
-/// Renders FRAMES frames orbiting the Cornell box; returns the last image's bits, the mean
+/// Renders frames() orbiting the Cornell box; returns the last image's bits, the mean
 /// milliseconds per frame of each WINDOW, and the resident memory after each WINDOW.
 fn run() -> (Vec<u32>, Vec<f64>, Vec<u64>) {
     let g = gpu();
@@ -32,7 +39,7 @@ fn run() -> (Vec<u32>, Vec<f64>, Vec<u64>) {
     let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
     let (mut times, mut memory) = (Vec::new(), Vec::new());
     let mut window = std::time::Instant::now();
-    for i in 0..FRAMES {
+    for i in 0..frames() {
         // A slow orbit, back and forth: 0.5 degrees a frame.
         let angle = (0.5 * i as f32).to_radians().sin() * 0.6;
         let camera = Camera {

@@ -1,22 +1,11 @@
 //! `wgsl/blur.wgsl`: the separable bilateral blur (horizontal, then vertical).
 
-use bytemuck::{Pod, Zeroable};
-
 use crate::gpu;
 use crate::settings::Precision;
-
-/// Mirrors `struct Blur` in `wgsl/blur.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct BlurUniform {
-    radius: u32,
-    _pad: [u32; 3],
-}
 
 /// Both directions of the blur with one radius.
 pub struct BlurPass {
     pipelines: [wgpu::ComputePipeline; 2],
-    uniform: wgpu::Buffer,
 }
 
 impl BlurPass {
@@ -30,16 +19,12 @@ impl BlurPass {
         let packed = &packed[..];
         let mut vertical = packed.to_vec();
         vertical.push("VERTICAL");
+        let radius = [("RADIUS", f64::from(radius))];
         BlurPass {
             pipelines: [
-                gpu::compute_pipeline(device, "blur", "blur_main", packed),
-                gpu::compute_pipeline(device, "blur", "blur_main", &vertical),
+                gpu::compute_pipeline_with(device, "blur", "blur_main", packed, &radius),
+                gpu::compute_pipeline_with(device, "blur", "blur_main", &vertical, &radius),
             ],
-            uniform: gpu::uniform_buffer(
-                device,
-                "deep-gbuffer.blur",
-                bytemuck::bytes_of(&BlurUniform { radius, _pad: [0; 3] }),
-            ),
         }
     }
 
@@ -59,7 +44,7 @@ impl BlurPass {
         for (pipeline, (from, to)) in
             self.pipelines.iter().zip([(source, scratch), (scratch, target)])
         {
-            let entries = [(0, frame), (1, &self.uniform), (2, gbuffer0), (3, from), (4, to)];
+            let entries = [(0, frame), (2, gbuffer0), (3, from), (4, to)];
             gpu::dispatch_pixels(device, pass, "deep-gbuffer.blur", pipeline, &entries, size);
         }
     }
