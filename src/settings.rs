@@ -39,19 +39,19 @@ impl Precision {
 
 /// Named accuracy levels, chosen from the Pareto fronts that `deep-gbuffer sweep` measured on the
 /// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance and radiosity tap
-/// counts, the number of layers the effects read and the G-buffer encoding; the rest stays as
+/// counts, the number of layers the effects read and the G-buffer encoding (full: the packed
+/// encoding measured no faster on lavapipe; it halves the G-buffer's memory); the rest stays as
 /// given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
 pub enum Preset {
-    /// 4 obscurance taps, 5 radiosity taps, layer 0 only, packed G-buffer: the cheapest point of
-    /// both fronts.
+    /// 4 obscurance taps, 5 radiosity taps, layer 0 only: the cheapest point of both fronts.
     Low,
-    /// 4 obscurance taps, 9 radiosity taps, both layers, packed: the two-layer point of the
-    /// obscurance front (lowest error there) at little more cost.
+    /// 4 obscurance taps, 9 radiosity taps, both layers: the two-layer point of the obscurance
+    /// front (lowest error there) at little more cost.
     Balanced,
-    /// 11 obscurance taps, 19 radiosity taps, both layers, packed.
+    /// 11 obscurance taps, 19 radiosity taps, both layers.
     High,
-    /// 32 obscurance taps, 27 radiosity taps, both layers, full-precision G-buffer.
+    /// 32 obscurance taps, 27 radiosity taps, both layers.
     Ultra,
 }
 
@@ -59,9 +59,9 @@ impl Preset {
     /// Applies the preset's knobs to `settings`.
     pub fn apply(self, settings: &mut Settings) {
         let (ao, radiosity, layers, precision) = match self {
-            Preset::Low => (4, 5, 1, Precision::Packed),
-            Preset::Balanced => (4, 9, 2, Precision::Packed),
-            Preset::High => (11, 19, 2, Precision::Packed),
+            Preset::Low => (4, 5, 1, Precision::Full),
+            Preset::Balanced => (4, 9, 2, Precision::Full),
+            Preset::High => (11, 19, 2, Precision::Full),
             Preset::Ultra => (32, 27, 2, Precision::Full),
         };
         settings.ao.samples = ao;

@@ -145,7 +145,7 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
     let mut low = Settings::default();
     Preset::Low.apply(&mut low);
     assert_eq!((low.ao.samples, low.radiosity.samples, low.layers), (4, 5, 1));
-    assert_eq!(low.precision, deep_gbuffer::Precision::Packed);
+    assert_eq!(low.precision, deep_gbuffer::Precision::Full);
     let mut ultra = Settings::default();
     Preset::Ultra.apply(&mut ultra);
     assert_eq!((ultra.ao.samples, ultra.radiosity.samples, ultra.layers), (32, 27, 0));
