@@ -271,11 +271,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     ao.validate()?;
     let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
-    let bar = indicatif::ProgressBar::new(u64::from(h)).with_style(
-        indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len} rows, {eta} left")
-            .expect("a valid template"),
-    );
-    bar.set_message(format!("tracing {:?} at {w}x{h}, {} rays per pixel", args.effect, args.spp));
+    let message =
+        format!("tracing {:?} at {w}x{h}, {} rays per pixel, rows", args.effect, args.spp);
+    let bar = progress_bar(u64::from(h), message);
     let started = std::time::Instant::now();
     let progress = || bar.inc(1);
     let (spp, seed) = (args.spp, args.seed);
@@ -319,10 +317,12 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
             renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         }
         let (buffer, passes, what): (_, &[&str], _) = match args.effect {
-            TruthEffect::Ao => (renderer.ao_buffer(), &["pyramid", "ao", "ao.blur"], "obscurance"),
+            TruthEffect::Ao => {
+                (renderer.ao_buffer(), &deep_gbuffer::sweep::AO_PASSES, "obscurance")
+            }
             TruthEffect::Indirect => (
                 renderer.radiosity_buffers().map(|b| b[4]),
-                &["direct", "radiosity", "radiosity.temporal", "radiosity.blur"],
+                &deep_gbuffer::sweep::RADIOSITY_PASSES,
                 "radiosity",
             ),
         };
