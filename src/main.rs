@@ -558,11 +558,8 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         .map(|l| renderer.read_gbuffer(&gpu.device, &gpu.queue, l))
         .collect::<Result<Vec<_>>>()?;
     let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue)?;
-    if diagnostics.dropped_triangles > 0 {
-        eprintln!(
-            "warning: {} large triangles did not fit the raster bin and were not drawn",
-            diagnostics.dropped_triangles
-        );
+    for line in diagnostics.warnings() {
+        eprintln!("warning: {line}");
     }
     let (w, h) = (settings.width, settings.height);
     let av = match renderer.ao_buffer() {

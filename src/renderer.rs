@@ -23,12 +23,70 @@ use crate::settings::{AtomicPath, Layer1Variant, Settings};
 use crate::{Error, Result};
 
 /// Counters the GPU keeps while rasterizing, read with [`Renderer::diagnostics`].
+///
+/// The `rejected_*` and `untextured_triangles` counters check what the CPU cannot: the contents
+/// of a host's [imported](crate::SceneBuffers::import) buffers. A rejected triangle is not drawn
+/// (it never reaches a kernel that would read through its bad index); each is counted once a
+/// frame, by the camera's layer-0 raster. Scenes uploaded from a [`Scene`](crate::Scene) are
+/// validated on the CPU and always count 0.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Diagnostics {
-    /// Triangles (after clipping) rasterized by the large-triangle tiles in the last frame.
+    /// Triangles (after clipping) rasterized by the large-triangle tiles in the last frame,
+    /// summed over every raster of the frame (both layers and the shadow maps).
     pub large_triangles: u32,
     /// Large triangles dropped because the bin was full (0 unless the bin is undersized).
     pub dropped_triangles: u32,
+    /// Triangles rejected because a vertex index is not below the vertex count.
+    pub rejected_indices: u32,
+    /// Triangles rejected because their material id is not below the material count.
+    pub rejected_materials: u32,
+    /// Triangles rejected because a vertex position is NaN or infinite.
+    pub rejected_positions: u32,
+    /// Triangles drawn with their base colour alone because their material's texture does not
+    /// lie inside the texel buffer (or has a zero size).
+    pub untextured_triangles: u32,
+}
+
+impl Diagnostics {
+    /// Triangles not drawn because of bad input.
+    pub fn rejected_triangles(&self) -> u32 {
+        self.rejected_indices + self.rejected_materials + self.rejected_positions
+    }
+
+    /// Whether any input was rejected or drawn without its texture.
+    pub fn has_bad_input(&self) -> bool {
+        self.rejected_triangles() + self.untextured_triangles > 0
+    }
+
+    /// One line per non-zero counter of lost or degraded geometry, for a log.
+    pub fn warnings(&self) -> Vec<String> {
+        [
+            (
+                self.dropped_triangles,
+                "large triangles did not fit the raster bin and were not drawn",
+            ),
+            (
+                self.rejected_indices,
+                "triangles have a vertex index past the vertex count (not drawn)",
+            ),
+            (
+                self.rejected_materials,
+                "triangles have a material id past the material count (not drawn)",
+            ),
+            (
+                self.rejected_positions,
+                "triangles have a NaN or infinite vertex position (not drawn)",
+            ),
+            (
+                self.untextured_triangles,
+                "triangles' textures lie outside the texel buffer (drawn untextured)",
+            ),
+        ]
+        .into_iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, what)| format!("{n} {what}"))
+        .collect()
+    }
 }
 
 /// Passes one frame can time (the capacity of the timestamp query set).
@@ -663,15 +721,18 @@ impl Renderer {
         let current = CameraMatrices::new(camera, s.width, s.height);
         let previous = self.history.unwrap_or(current);
         let b = scene.buffers();
-        let uniform = FrameUniform::new(
-            camera,
-            current,
-            previous,
-            s.width,
-            s.height,
-            s.dz,
-            (b.triangle_count, b.material_count, b.vertex_count),
-        );
+        let uniform = FrameUniform {
+            flags: gpu::FRAME_DIAGNOSTICS,
+            ..FrameUniform::new(
+                camera,
+                current,
+                previous,
+                s.width,
+                s.height,
+                s.dz,
+                (b.triangle_count, b.material_count, b.vertex_count),
+            )
+        };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
         self.last_frame = Some(uniform);
         let needed =
@@ -1233,10 +1294,17 @@ impl Renderer {
         Ok(bytemuck::pod_collect_to_vec::<u8, f32>(&bytes[..bytes.len() / 4 * 4]))
     }
 
-    /// Reads the raster counters of the last frame (waits for the GPU).
+    /// Reads the raster counters and the bad-input counts of the last frame (waits for the GPU).
     pub fn diagnostics(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Diagnostics> {
         let bytes = gpu::read_buffer(device, queue, &self.bins)?;
         let w: &[u32] = bytemuck::cast_slice(&bytes[..raster::BINS_BYTES as usize]);
-        Ok(Diagnostics { large_triangles: w[3], dropped_triangles: w[1] })
+        Ok(Diagnostics {
+            large_triangles: w[3],
+            dropped_triangles: w[1],
+            rejected_indices: w[8],
+            rejected_materials: w[9],
+            rejected_positions: w[10],
+            untextured_triangles: w[11],
+        })
     }
 }

@@ -224,3 +224,113 @@ fn composite_into_the_hosts_storage_texture() {
             .is_err()
     );
 }
+
+/// The host's buffers as the CPU never sees them: bad indices, a bad material id, a NaN
+/// position and a texture past the texel buffer. Each bad triangle is rejected on the GPU (the
+/// image is bit for bit that of the good triangles alone) and counted once a frame.
+#[test]
+fn bad_imported_triangles_are_rejected_and_counted() {
+    let (device, queue) = host_device();
+    let nan = f32::NAN;
+    // 0-3: a quad facing +z; 4: NaN; 5-7: a small triangle left of the quad.
+    let positions: [f32; 24] = [
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0, nan, 0.0, 0.0, -1.8, -0.3,
+        0.0, -1.2, -0.3, 0.0, -1.5, 0.3, 0.0,
+    ];
+    let normals: Vec<f32> = (0..8).flat_map(|_| [0.0, 0.0, 1.0]).collect();
+    let uvs = [0.25f32; 16];
+    let material = |base: f32, flags: u32, texture_offset: u32| GpuMaterial {
+        base_color: [base, base, base, 1.0],
+        roughness: 1.0,
+        flags,
+        texture_offset,
+        texture_width: 2,
+        texture_height: 2,
+        ..Default::default()
+    };
+    let textured = deep_gbuffer::scene::upload::MATERIAL_TEXTURED;
+    let import = |triangles: &[([u32; 3], u32)], materials: &[GpuMaterial]| {
+        let indices: Vec<u32> = triangles.iter().flat_map(|(t, _)| *t).collect();
+        let ids: Vec<u32> = triangles.iter().map(|(_, m)| *m).collect();
+        let buffers = ImportedBuffers {
+            positions: storage(&device, "host.positions", bytemuck::cast_slice(&positions)),
+            normals: storage(&device, "host.normals", bytemuck::cast_slice(&normals)),
+            uvs: storage(&device, "host.uvs", bytemuck::cast_slice(&uvs)),
+            indices: storage(&device, "host.indices", bytemuck::cast_slice(&indices)),
+            triangle_materials: storage(&device, "host.ids", bytemuck::cast_slice(&ids)),
+            materials: storage(&device, "host.materials", bytemuck::cast_slice(materials)),
+            // Four texels: a 2x2 texture fits at offset 0 and not at offset 3.
+            texels: storage(&device, "host.texels", &[255u8; 16]),
+            vertex_count: 8,
+            triangle_count: triangles.len() as u32,
+            material_count: materials.len() as u32,
+        };
+        let info = SceneInfo {
+            lights: vec![Light {
+                name: "key".into(),
+                kind: LightKind::Directional { direction: Vec3::new(0.3, -0.2, -1.0) },
+                color: Vec3::ONE,
+                intensity: 2.0,
+                casts_shadows: true,
+            }],
+            ambient: Vec3::splat(0.2),
+            reflective: false,
+            emissive: false,
+            bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
+        };
+        SceneBuffers::import(&device, buffers, info).unwrap()
+    };
+    let good = [([0, 1, 2], 0), ([0, 2, 3], 0), ([5, 6, 7], 1)];
+    let bad = [
+        ([0, 1, 2], 0),
+        ([0, 1, u32::MAX], 0),
+        ([0, 2, 8], 0),
+        ([0, 2, 3], 0),
+        ([1, 2, 3], u32::MAX),
+        ([1, 2, 3], 2),
+        ([0, 4, 2], 0),
+        ([5, 6, 7], 1),
+    ];
+    // The bad scene's material 1 names a texture past the texels; it is drawn untextured,
+    // exactly as the good scene's untextured material 1.
+    let reference = import(&good, &[material(0.5, 0, 0), material(0.8, 0, 0)]);
+    let scene = import(&bad, &[material(0.5, 0, 0), material(0.8, textured, 3)]);
+
+    let (w, h) = (40u32, 24u32);
+    let camera =
+        Camera::perspective(Vec3::new(-0.3, 0.0, 3.0), Vec3::new(-0.3, 0.0, 0.0), 50.0, 0.1);
+    let frame = |scene: &SceneBuffers| {
+        let mut renderer = Renderer::new(&device, &queue, Settings::with_size(w, h)).unwrap();
+        let mut counts = Vec::new();
+        for _ in 0..2 {
+            renderer.render(&device, &queue, scene, &camera).unwrap();
+            counts.push(renderer.diagnostics(&device, &queue).unwrap());
+        }
+        let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer().unwrap()).unwrap();
+        (hdr, counts)
+    };
+    let (expected, clean) = frame(&reference);
+    let (image, counts) = frame(&scene);
+    assert!(clean.iter().all(|d| !d.has_bad_input()), "{clean:?}");
+    for d in &counts {
+        // Counted once a frame (the shadow map's raster reads the same triangles, uncounted).
+        assert_eq!(
+            (
+                d.rejected_indices,
+                d.rejected_materials,
+                d.rejected_positions,
+                d.untextured_triangles
+            ),
+            (2, 2, 1, 1),
+            "{d:?}"
+        );
+        assert_eq!(d.rejected_triangles(), 5);
+        assert_eq!(d.warnings().len(), 4, "{:?}", d.warnings());
+    }
+    assert!(image.iter().all(|p| p.is_finite()));
+    let lit = expected.iter().filter(|p| p.x > 0.3).count();
+    assert!(lit > 200, "the quad and the triangle are in view ({lit} pixels)");
+    for (i, (a, b)) in image.iter().zip(&expected).enumerate() {
+        assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
+    }
+}

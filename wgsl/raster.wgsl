@@ -43,7 +43,8 @@ const MAX_POLY: u32 = 9u;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 // Bin b (0 or 1) keeps at [4b] the triangles binned since the last bin_args and at [4b + 2] the
 // entries of the current raster_large dispatch; [1]: triangles dropped for lack of room,
-// [3]: binned triangles this frame.
+// [3]: binned triangles this frame; [DIAG_*]: triangles rejected (or drawn untextured) for bad
+// input, counted by the camera's layer-0 raster only (frame.flags & FRAME_DIAGNOSTICS).
 @group(0) @binding(5) var<storage, read_write> bins: array<atomic<u32>>;
 // Bin b holds its entries at [b * capacity, (b + 1) * capacity), capacity = length / 2. An entry
 // is (triangle << 3 | clipped sub-triangle, tile count).
@@ -59,6 +60,16 @@ const MAX_POLY: u32 = 9u;
 #if COUNT
 @group(0) @binding(11) var<storage, read_write> counts: array<atomic<u32>>;
 #endif
+#if WRITE_L0
+// Only its length is read: whether a material's texture lies inside it.
+@group(0) @binding(12) var<storage, read> texels: array<u32>;
+#endif
+
+// Diagnostics words in `bins` (src/renderer.rs reads them as `Diagnostics`).
+const DIAG_INDEX: u32 = 8u;
+const DIAG_MATERIAL: u32 = 9u;
+const DIAG_POSITION: u32 = 10u;
+const DIAG_TEXTURE: u32 = 11u;
 
 // A clip-space vertex: (x, y, w, view depth).
 alias ClipVertex = vec4<f32>;
@@ -81,8 +92,12 @@ fn finite(x: f32) -> bool {
     return abs(x) <= 3.0e38;
 }
 
-fn transform(vertex: u32) -> ClipVertex {
-    let p = vec4<f32>(positions[3u * vertex], positions[3u * vertex + 1u], positions[3u * vertex + 2u], 1.0);
+fn position(vertex: u32) -> vec3<f32> {
+    return vec3<f32>(positions[3u * vertex], positions[3u * vertex + 1u], positions[3u * vertex + 2u]);
+}
+
+fn transform(world: vec3<f32>) -> ClipVertex {
+    let p = vec4<f32>(world, 1.0);
     let v = mat_mul(frame.view, p);
     let c = mat_mul(frame.proj, v);
     return vec4<f32>(c.x, c.y, c.w, -v.z);
@@ -101,9 +116,9 @@ fn plane_distance(plane: u32, v: ClipVertex) -> f32 {
 // Clips triangle t against the near plane and the guard band. Returns the polygon's vertex count
 // (0 when nothing is left); its fan (0, k + 1, k + 2) gives the sub-triangles.
 fn clip_triangle(t: u32, poly: ptr<function, array<ClipVertex, MAX_POLY>>) -> u32 {
-    (*poly)[0] = transform(indices[3u * t]);
-    (*poly)[1] = transform(indices[3u * t + 1u]);
-    (*poly)[2] = transform(indices[3u * t + 2u]);
+    (*poly)[0] = transform(position(indices[3u * t]));
+    (*poly)[1] = transform(position(indices[3u * t + 1u]));
+    (*poly)[2] = transform(position(indices[3u * t + 2u]));
     var all_inside = true;
     for (var i = 0u; i < 3u; i++) {
         let v = (*poly)[i];
@@ -178,8 +193,8 @@ fn setup(t: u32, poly: ptr<function, array<ClipVertex, MAX_POLY>>, k: u32) -> Se
         return s;
     }
     // Counter-clockwise in NDC (y up) is negative area in pixel space (y down): front facing.
-    let material = tri_materials[t];
-    let double_sided = material < frame.material_count && (materials[material].flags & MATERIAL_DOUBLE_SIDED) != 0u;
+    // raster_small rejected triangles whose material id is out of range.
+    let double_sided = (materials[tri_materials[t]].flags & MATERIAL_DOUBLE_SIDED) != 0u;
     if o > 0 && !double_sided {
         return s;
     }
@@ -284,11 +299,57 @@ fn raster_small_triangle(s: Setup, t: u32) {
     }
 }
 
+// Why triangle t must not be drawn: 0 when it can be, else the diagnostics word that counts it.
+// The imported buffers are the host's, unchecked by the CPU: an index past the vertices or the
+// materials would read another triangle's data (or, without robust access, out of bounds).
+fn rejection(t: u32) -> u32 {
+    let i = vec3<u32>(indices[3u * t], indices[3u * t + 1u], indices[3u * t + 2u]);
+    if any(i >= vec3<u32>(frame.vertex_count)) {
+        return DIAG_INDEX;
+    }
+    if tri_materials[t] >= frame.material_count {
+        return DIAG_MATERIAL;
+    }
+    for (var k = 0u; k < 3u; k++) {
+        let p = position(i[k]);
+        if !(finite(p.x) && finite(p.y) && finite(p.z)) {
+            return DIAG_POSITION;
+        }
+    }
+    return 0u;
+}
+
+// Whether material m names a texture that does not lie inside the texel buffer (resolve then
+// draws it with its base colour alone).
+fn texture_outside(m: Material) -> bool {
+#if WRITE_L0
+    return (m.flags & MATERIAL_TEXTURED) != 0u && !texture_fits(m, arrayLength(&texels));
+#else
+    return false;
+#endif
+}
+
+fn count_diagnostic(word: u32) {
+#if WRITE_L0
+    if (frame.flags & FRAME_DIAGNOSTICS) != 0u {
+        atomicAdd(&bins[word], 1u);
+    }
+#endif
+}
+
 @compute @workgroup_size(64)
 fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
     let t = gid.x + gid.y * n.x * 64u;
     if t >= frame.triangle_count {
         return;
+    }
+    let rejected = rejection(t);
+    if rejected != 0u {
+        count_diagnostic(rejected);
+        return;
+    }
+    if texture_outside(materials[tri_materials[t]]) {
+        count_diagnostic(DIAG_TEXTURE);
     }
     var poly: array<ClipVertex, MAX_POLY>;
     let count = clip_triangle(t, &poly);

@@ -142,7 +142,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
     if mid < frame.material_count {
         let m = materials[mid];
         var base = m.base_color.rgb;
-        if (m.flags & MATERIAL_TEXTURED) != 0u && m.texture_width > 0u && m.texture_height > 0u {
+        if (m.flags & MATERIAL_TEXTURED) != 0u && texture_fits(m, arrayLength(&texels)) {
             let uv = vec2<f32>(uvs[2u * i0], uvs[2u * i0 + 1u]) * bary.x
                 + vec2<f32>(uvs[2u * i1], uvs[2u * i1 + 1u]) * bary.y
                 + vec2<f32>(uvs[2u * i2], uvs[2u * i2 + 1u]) * bary.z;

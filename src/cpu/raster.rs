@@ -62,6 +62,14 @@ fn lerp4(a: ClipVertex, b: ClipVertex, t: f32) -> ClipVertex {
     std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t)
 }
 
+/// Whether triangle `t` must not be drawn: an index past the vertices or a non-finite position
+/// (`rejection` in the shader, which also checks the material id against the material count).
+fn rejected(input: &RasterInput, t: usize) -> bool {
+    input.triangles[t]
+        .iter()
+        .any(|&i| input.positions.get(i as usize).is_none_or(|p| !p.is_finite()))
+}
+
 /// The clipped polygon of triangle `t` (empty when nothing is left).
 fn clip_triangle(f: &FrameUniform, input: &RasterInput, t: usize) -> Vec<ClipVertex> {
     let tri = input.triangles[t];
@@ -204,6 +212,9 @@ pub fn rasterize(
         }
     };
     for t in 0..input.triangles.len().min(f.triangle_count as usize) {
+        if rejected(input, t) {
+            continue;
+        }
         let poly = clip_triangle(f, input, t);
         for k in 0..poly.len().saturating_sub(2) {
             let Some(s) = setup(f, input, t, &poly, k) else { continue };

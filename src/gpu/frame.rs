@@ -48,9 +48,13 @@ pub struct FrameUniform {
     pub material_count: u32,
     /// Vertices in the scene.
     pub vertex_count: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// Bits: [`FRAME_DIAGNOSTICS`].
+    pub flags: u32,
 }
+
+/// [`FrameUniform::flags`] bit: the raster that reads this frame counts rejected input (the
+/// camera's layer 0; not the shadow maps, so each triangle counts once a frame).
+pub const FRAME_DIAGNOSTICS: u32 = 1;
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 5 * 64 + 12 * 4);
 
@@ -102,7 +106,7 @@ impl FrameUniform {
             triangle_count: counts.0,
             material_count: counts.1,
             vertex_count: counts.2,
-            _pad: 0,
+            flags: 0,
         }
     }
 }

@@ -13,7 +13,7 @@ use wgpu::util::DeviceExt;
 
 use crate::{Error, Result};
 
-pub use frame::FrameUniform;
+pub use frame::{FRAME_DIAGNOSTICS, FrameUniform};
 pub use timestamps::{PassTiming, Timestamps};
 
 /// The WGSL text of `wgsl/<name>` with `defines`, includes expanded.

@@ -34,8 +34,8 @@ struct Pipelines {
     large: [wgpu::ComputePipeline; 2],
 }
 
-/// Bytes of the bin counters (8 u32, see `bins` in `wgsl/raster.wgsl`).
-pub const BINS_BYTES: u64 = 32;
+/// Bytes of the bin counters and diagnostics words (12 u32, see `bins` in `wgsl/raster.wgsl`).
+pub const BINS_BYTES: u64 = 48;
 /// Bytes of the indirect arguments (two dispatches of 4 u32).
 pub const ARGS_BYTES: u64 = 32;
 
@@ -153,11 +153,15 @@ impl RasterPass {
                     entries.push((binding, buffer.expect("the mode's buffers are given")));
                 }
             }
-            let small = gpu::bind_group(device, "deep-gbuffer.raster.small", &p.small, &entries);
             let large = p
                 .large
                 .each_ref()
                 .map(|l| gpu::bind_group(device, "deep-gbuffer.raster.large", l, &entries));
+            if wanted.contains(&8) {
+                // raster_small checks textures against the texel buffer's length.
+                entries.push((12, &b.texels));
+            }
+            let small = gpu::bind_group(device, "deep-gbuffer.raster.small", &p.small, &entries);
             let args = gpu::bind_group(
                 device,
                 "deep-gbuffer.raster.args",

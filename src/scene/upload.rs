@@ -198,8 +198,10 @@ impl SceneBuffers {
     }
 
     /// Uses a host engine's buffers as they are (no copy), after checking their sizes and usage
-    /// against the counts. Index and material-id values are not checked here: the kernels
-    /// ignore triangles whose ids are out of range.
+    /// against the counts. Index, material-id, position and texture values are not read back
+    /// here: the rasterizer rejects each triangle whose indices or material id are out of range
+    /// or whose positions are not finite, draws a material whose texture lies outside `texels`
+    /// with its base colour, and counts both in [`Diagnostics`](crate::Diagnostics).
     pub fn import(
         device: &wgpu::Device,
         buffers: ImportedBuffers,

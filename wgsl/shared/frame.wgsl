@@ -16,8 +16,11 @@ struct Frame {
     triangle_count: u32,
     material_count: u32,
     vertex_count: u32,
-    _pad: u32,
+    flags: u32,
 }
+
+// Frame.flags bit: this raster counts rejected input into the diagnostics words.
+const FRAME_DIAGNOSTICS: u32 = 1u;
 
 // m * v written out, so every implementation sums in the same order.
 fn mat_mul(m: mat4x4<f32>, v: vec4<f32>) -> vec4<f32> {

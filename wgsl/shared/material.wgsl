@@ -16,3 +16,11 @@ struct Material {
 
 const MATERIAL_DOUBLE_SIDED: u32 = 1u;
 const MATERIAL_TEXTURED: u32 = 2u;
+
+// Whether material m has a texture that lies wholly inside a texel buffer of `texel_count`
+// texels (checked without overflow: the host's materials are not checked by the CPU).
+fn texture_fits(m: Material, texel_count: u32) -> bool {
+    let w = m.texture_width;
+    let h = m.texture_height;
+    return w > 0u && h > 0u && w <= texel_count && h <= texel_count / w && m.texture_offset <= texel_count - w * h;
+}
