@@ -519,6 +519,32 @@ impl Renderer {
         &self.settings
     }
 
+    /// Changes the image size between frames. Every per-pixel target is reallocated and the
+    /// temporal history restarts (the next frame is a first frame, as after
+    /// [`reset_history`](Renderer::reset_history)); compiled raster and resolve pipelines and
+    /// the environment map are kept. A size the device cannot hold is an error that leaves the
+    /// renderer as it was.
+    pub fn resize(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        width: u32,
+        height: u32,
+    ) -> Result<()> {
+        if (width, height) == (self.settings.width, self.settings.height) {
+            return Ok(());
+        }
+        let settings = Settings { width, height, ..self.settings.clone() };
+        let mut next = Renderer::new(device, queue, settings)?;
+        std::mem::swap(&mut next.raster, &mut self.raster);
+        std::mem::swap(&mut next.fill, &mut self.fill);
+        std::mem::swap(&mut next.resolve, &mut self.resolve);
+        next.environment = self.environment.take();
+        next.in_flight = self.in_flight.take();
+        *self = next;
+        Ok(())
+    }
+
     /// Sets the equirectangular environment that reflection rays see when they leave the screen
     /// (`None`: the scene's constant ambient sky, the default). The map is uploaded once and
     /// kept until the next call.

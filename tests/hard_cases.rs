@@ -1,15 +1,19 @@
 //! Hard cases through the whole pipeline: every case renders frames on the test device and checks
 //! that no output or history buffer holds a NaN or an infinity, that AV lies in [0, 1], and that
-//! radiance and irradiance are never negative.
+//! radiance and irradiance are never negative and never above what the lights deliver.
 
 mod common;
 
 use common::{gpu, mesh, soup};
-use deep_gbuffer::scene::Projection;
+use std::f32::consts::PI;
+
+use deep_gbuffer::cpu::frame::{mat_mul, view_position};
+use deep_gbuffer::scene::{GpuLight, Projection};
 use deep_gbuffer::{
-    AoSettings, Camera, RadiositySettings, Renderer, Scene, SceneBuffers, Settings,
+    AoSettings, Camera, GSample, RadiositySettings, Renderer, Scene, SceneBuffers, SceneInfo,
+    Settings,
 };
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 /// What one checked frame showed.
 struct Checked {
@@ -25,10 +29,46 @@ fn vec4s(r: &Renderer, b: &wgpu::Buffer) -> Vec<Vec4> {
     v.chunks_exact(4).take(n).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect()
 }
 
-/// Checks every buffer the last frame of `r` wrote.
-fn check_buffers(r: &Renderer, what: &str) -> usize {
+/// Relative slack on the upper bounds below: the GPU and this test compute the world point and
+/// the light's distance in different f32 operation orders.
+const BOUND_SLACK: f32 = 1e-3;
+
+/// An upper bound on the direct radiance leaving `s`, from what `lights` can deliver there:
+/// each light's unattenuated irradiance E (radiance / d^2 for point and spot lights; the range
+/// window, the cone and shadows only lower it) times the largest value of brdf * n.l. Lambert
+/// gives at most albedo (1 - metallic) / pi; GGX's D is at most 1 / (pi a^2), Smith-Schlick
+/// visibility times n.l at most 1 / (2a) (k = a/2), Fresnel at most 1.
+fn direct_bound(s: &GSample, world: Vec3, lights: &[GpuLight]) -> Vec3 {
+    let a = (s.roughness * s.roughness).max(1e-3);
+    let brdf = s.base_color * (1.0 - s.metallic) / PI + Vec3::splat(1.0 / (2.0 * PI * a * a * a));
+    lights
+        .iter()
+        .map(|l| {
+            let radiance = Vec3::from(l.radiance);
+            let e = if l.kind == 0 {
+                radiance
+            } else {
+                radiance / (Vec3::from(l.position) - world).length_squared().max(1e-8)
+            };
+            e * brdf
+        })
+        .sum()
+}
+
+/// Checks every buffer the last frame of `r` wrote, drawing `scene`: finite, non-negative, AV
+/// in [0, 1], direct radiance within [`direct_bound`], and the radiosity gather's irradiance
+/// (pi times a cosine-weighted mean of the B it reads) within pi times the largest B.
+fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
     let g = gpu();
     let n = (r.settings().width * r.settings().height) as usize;
+    let lights: Vec<GpuLight> = SceneInfo::of(scene).lights.iter().map(GpuLight::new).collect();
+    let f = *r.frame_uniform().expect("a frame");
+    let layer0 = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let world = |p: usize| {
+        let px = Vec2::new((p as u32 % f.width) as f32 + 0.5, (p as u32 / f.width) as f32 + 0.5);
+        let v = view_position(&f, px, layer0.samples[p].depth);
+        mat_mul(&f.inv_view, [v.x, v.y, v.z, 1.0]).truncate()
+    };
     let finite_nonneg = |name: &str, v: &[Vec4]| {
         for (p, x) in v.iter().enumerate() {
             assert!(x.is_finite(), "{what}: {name} pixel {p} is {x}");
@@ -38,7 +78,17 @@ fn check_buffers(r: &Renderer, what: &str) -> usize {
     let hdr = vec4s(r, r.hdr_buffer().expect("a frame"));
     finite_nonneg("hdr", &hdr);
     if let Some(b) = r.direct_buffer() {
-        finite_nonneg("direct", &vec4s(r, b));
+        let direct = vec4s(r, b);
+        finite_nonneg("direct", &direct);
+        for (p, (l, s)) in direct.iter().zip(&layer0.samples).enumerate() {
+            if s.depth > 0.0 {
+                let bound = direct_bound(s, world(p), &lights) * (1.0 + BOUND_SLACK);
+                assert!(
+                    l.truncate().cmple(bound).all(),
+                    "{what}: direct radiance {l} at pixel {p} above what the lights deliver, {bound}"
+                );
+            }
+        }
     }
     if let Some(av) = r.ao_buffer() {
         let av = r.read_f32(&g.device, &g.queue, av).unwrap();
@@ -47,16 +97,26 @@ fn check_buffers(r: &Renderer, what: &str) -> usize {
         }
     }
     if let Some(buffers) = r.radiosity_buffers() {
+        let mut values = Vec::new();
         for (name, b) in ["b0", "b1", "raw", "history", "blurred"].iter().zip(buffers) {
             let v = vec4s(r, b);
             finite_nonneg(name, &v);
             assert!(v.iter().all(|x| x.w <= 1.0), "{what}: {name} confidence above 1");
+            values.push(v);
+        }
+        let largest_b =
+            values[0].iter().chain(&values[1]).fold(Vec3::ZERO, |m, b| m.max(b.truncate()));
+        let bound = PI * largest_b * (1.0 + BOUND_SLACK);
+        for (p, e) in values[2].iter().enumerate() {
+            assert!(
+                e.truncate().cmple(bound).all(),
+                "{what}: gathered irradiance {e} at pixel {p} above pi max B = {bound}"
+            );
         }
     }
     if let Some(b) = r.reflections_buffer() {
         finite_nonneg("reflections", &vec4s(r, b));
     }
-    let layer0 = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     for s in &layer0.samples {
         assert!(s.depth.is_finite() && s.depth >= 0.0, "{what}: depth {}", s.depth);
         if s.depth > 0.0 {
@@ -74,7 +134,7 @@ fn check(scene: &Scene, camera: &Camera, settings: Settings, frames: u32, what: 
     let mut surfaces = 0;
     for _ in 0..frames {
         renderer.render(&g.device, &g.queue, &buffers, camera).unwrap();
-        surfaces = check_buffers(&renderer, what);
+        surfaces = check_buffers(&renderer, scene, what);
     }
     Checked { surfaces, renderer }
 }
@@ -360,12 +420,12 @@ fn temporal_cut_and_an_object_moving_away() {
     let mut r = Renderer::new(&g.device, &g.queue, settings.clone()).unwrap();
     for _ in 0..5 {
         r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        check_buffers(&r, "before the cut");
+        check_buffers(&r, &scene, "before the cut");
     }
     r.reset_history();
     let far = Camera { eye: camera.eye + Vec3::new(0.5, 0.2, 1.0), ..camera.clone() };
     r.render(&g.device, &g.queue, &buffers, &far).unwrap();
-    check_buffers(&r, "after the cut");
+    check_buffers(&r, &scene, "after the cut");
 
     // Move the short box (the material "shortBox") 5 units away: the floor under it appears.
     let mut moved = scene.clone();
@@ -387,7 +447,7 @@ fn temporal_cut_and_an_object_moving_away() {
     let before_cut = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     assert_eq!(before.width, before_cut.width);
     r.render(&g.device, &g.queue, &moved_buffers, &camera).unwrap();
-    check_buffers(&r, "the box moved away");
+    check_buffers(&r, &moved, "the box moved away");
     let after = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     let [.., raw, history, _] = r.radiosity_buffers().unwrap();
     let (raw, history) = (vec4s(&r, raw), vec4s(&r, history));
@@ -408,4 +468,43 @@ fn temporal_cut_and_an_object_moving_away() {
         }
     }
     assert!(uncovered > 5, "the move uncovers floor ({uncovered} pixels)");
+}
+
+/// Resizing between frames: the history restarts, so the first frame after a resize is bit for
+/// bit a fresh renderer's first frame at the new size; a size the device cannot hold is an error
+/// that leaves the renderer drawing at its old size.
+#[test]
+fn resize_between_frames() {
+    let g = gpu();
+    let (scene, camera) = cornell();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let first_frame = |settings: Settings| {
+        let mut fresh = Renderer::new(&g.device, &g.queue, settings).unwrap();
+        fresh.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        vec4s(&fresh, fresh.hdr_buffer().unwrap())
+    };
+    let mut r = Renderer::new(&g.device, &g.queue, small()).unwrap();
+    for _ in 0..4 {
+        r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    }
+    for (w, h) in [(20, 14), (32, 24), (7, 5)] {
+        r.resize(&g.device, &g.queue, w, h).unwrap();
+        r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        check_buffers(&r, &scene, &format!("resized to {w}x{h}"));
+        let image = vec4s(&r, r.hdr_buffer().unwrap());
+        assert_eq!(image.len(), (w * h) as usize);
+        let expected = first_frame(Settings { width: w, height: h, ..small() });
+        assert!(image == expected, "the first frame after resizing to {w}x{h} kept history");
+        for _ in 0..2 {
+            r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+            check_buffers(&r, &scene, &format!("{w}x{h}, later frames"));
+        }
+    }
+    for (w, h) in [(0, 5), (5, 0), (100_000, 4)] {
+        let e = r.resize(&g.device, &g.queue, w, h).unwrap_err();
+        assert!(matches!(e, deep_gbuffer::Error::InvalidSetting { .. }), "{w}x{h}: {e}");
+    }
+    assert_eq!((r.settings().width, r.settings().height), (7, 5));
+    r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    check_buffers(&r, &scene, "after refused resizes");
 }
