@@ -94,7 +94,8 @@ const MAX_TIMED_PASSES: u32 = 32;
 
 /// Renders deep G-buffers on a device it borrows.
 ///
-/// Create it once per device and image size; call [`encode`](Renderer::encode) once per frame.
+/// Create it once per device; call [`encode`](Renderer::encode) once per frame and
+/// [`resize`](Renderer::resize) when the image size changes.
 /// It owns only its targets and the history that the one-pass layer-1 variants need.
 pub struct Renderer {
     settings: Settings,
