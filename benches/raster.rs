@@ -11,13 +11,15 @@
 //! (default `cornell,engine`) narrow the run. A summary table (mean ms per pass, and the
 //! compute/hardware ratio) is printed at the end and written to `target/raster-bench.md`.
 
+mod common;
+
 use std::sync::Mutex;
 use std::time::Duration;
 
 use criterion::Criterion;
 use deep_gbuffer::gpu::{Gpu, GpuOptions, Timestamps};
 use deep_gbuffer::passes::baseline::BaselinePass;
-use deep_gbuffer::{Camera, Layer1Variant, Precision, Renderer, Scene, SceneBuffers, Settings};
+use deep_gbuffer::{Camera, Layer1Variant, Precision, Renderer, SceneBuffers, Settings};
 use wgpu::util::DeviceExt;
 
 static SUMMARY: Mutex<Vec<(String, String, f64)>> = Mutex::new(Vec::new());
@@ -61,18 +63,7 @@ fn packed_error(gpu: &Gpu, buffers: &SceneBuffers, camera: &Camera, w: u32, h: u
     )
 }
 
-fn load(name: &str) -> Scene {
-    match name {
-        "engine" => Scene::load(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("fixtures/engine/2CylinderEngine.gltf"),
-        ),
-        other => Scene::from_spec(&format!("builtin:{other}")),
-    }
-    .unwrap_or_else(|e| panic!("scene {name}: {e}"))
-}
-
-/// Mean GPU milliseconds of `pass` over `iters` frames of `renderer`.
+/// Summed GPU milliseconds of `pass` over `iters` frames of `renderer`.
 fn frames(
     gpu: &Gpu,
     renderer: &mut Renderer,
@@ -81,17 +72,9 @@ fn frames(
     pass: &str,
     iters: u64,
 ) -> f64 {
-    let mut total = 0.0;
-    for _ in 0..iters {
-        renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
-        let timings = renderer.timings(&gpu.device).unwrap();
-        total += timings
-            .iter()
-            .find(|t| t.name == pass)
-            .unwrap_or_else(|| panic!("no pass {pass}: {timings:?}"))
-            .ms;
-    }
-    total
+    let mut totals = common::PassTotals::default();
+    common::timed_frames(gpu, renderer, scene, camera, iters, &mut totals);
+    *totals.ms.get(pass).unwrap_or_else(|| panic!("no pass {pass}: {:?}", totals.ms.keys()))
 }
 
 fn record(group: &str, name: &str, sum: f64, count: u64) {
@@ -103,7 +86,7 @@ fn record(group: &str, name: &str, sum: f64, count: u64) {
 }
 
 fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h): (u32, u32)) {
-    let scene = load(scene_name);
+    let scene = common::load(scene_name);
     let camera = scene.camera_or_default();
     let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
     let group_name = format!("{scene_name} ({} triangles) {w}x{h}", scene.triangle_count());
@@ -191,18 +174,10 @@ fn main() {
     let gpu =
         Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
     let hw = Gpu::new(&GpuOptions::default()).expect("a second device for the hardware baseline");
-    let sizes: Vec<(u32, u32)> = std::env::var("DEEP_GBUFFER_BENCH_SIZES")
-        .unwrap_or_else(|_| "256x256,1920x1080".into())
-        .split(',')
-        .map(|s| {
-            let (w, h) = s.split_once('x').expect("WxH");
-            (w.parse().unwrap(), h.parse().unwrap())
-        })
-        .collect();
-    let scenes =
-        std::env::var("DEEP_GBUFFER_BENCH_SCENES").unwrap_or_else(|_| "cornell,engine".into());
+    let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
+    let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,engine");
     let mut c = Criterion::default().configure_from_args();
-    for scene in scenes.split(',') {
+    for scene in &scenes {
         for &size in &sizes {
             bench_scene(&mut c, &gpu, &hw, scene, size);
         }
@@ -234,7 +209,5 @@ fn main() {
         table += row;
         table += "\n";
     }
-    println!("\n{table}");
-    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/raster-bench.md");
-    let _ = std::fs::write(out, table);
+    common::write_summary("raster-bench.md", &table);
 }

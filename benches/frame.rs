@@ -1,0 +1,238 @@
+//! Whole frames timed with GPU timestamp queries (criterion `iter_custom`: the time criterion
+//! reports is the frame's GPU time, the sum of its passes), in three groups:
+//!
+//! - `passes`: every pass of the full GI frame and of the direct-only frame (the same direct
+//!   light and shadows, no obscurance, radiosity or reflections) on the Cornell box and a dense
+//!   scene at 256x256 and 1920x1080; their ratio is what the GI costs.
+//! - `triangles`: the two-layer raster (two-pass) and the resolve of `grid-N` for N from 1K to
+//!   5M triangles at 640x360; the slope is milliseconds per million triangles.
+//! - `resolution`: every pass of the Cornell frame from 256x256 to 3840x2160; the slope of each
+//!   per-pixel pass is milliseconds per megapixel (the shadow maps do not depend on it). A size
+//!   the device cannot hold is listed with the error it gets.
+//!
+//! Environment: `DEEP_GBUFFER_BENCH_GROUPS` (default `passes,triangles,resolution`),
+//! `DEEP_GBUFFER_BENCH_SCENES` (default `cornell,grid-100000`), `DEEP_GBUFFER_BENCH_SIZES`
+//! (default `256x256,1920x1080`), `DEEP_GBUFFER_BENCH_TRIANGLES` (default
+//! `1000,10000,100000,1000000,5000000`), `DEEP_GBUFFER_BENCH_RESOLUTIONS` (default
+//! `256x256,640x480,1280x720,1920x1080,2560x1440,3840x2160`). The summary is printed at the end
+//! and written to `target/frame-bench.md`.
+
+mod common;
+
+use std::fmt::Write as _;
+use std::time::Duration;
+
+use common::PassTotals;
+use criterion::{Criterion, SamplingMode};
+use deep_gbuffer::gpu::{Gpu, GpuOptions};
+use deep_gbuffer::{Effects, Renderer, SceneBuffers, Settings};
+
+/// One criterion function timing whole frames of `settings`; the per-pass means come back.
+fn bench_frames(
+    c: &mut Criterion,
+    gpu: &Gpu,
+    group: &str,
+    name: &str,
+    scene: &SceneBuffers,
+    camera: &deep_gbuffer::Camera,
+    settings: Settings,
+) -> Result<PassTotals, deep_gbuffer::Error> {
+    let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
+    // Pipelines are built on first use; the first frame (and the one-pass variants' two-pass
+    // first frame) stays out of the figures.
+    for _ in 0..2 {
+        renderer.render(&gpu.device, &gpu.queue, scene, camera)?;
+    }
+    let mut totals = PassTotals::default();
+    let mut g = c.benchmark_group(group);
+    g.sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(200))
+        .measurement_time(Duration::from_secs(2));
+    g.bench_function(name, |b| {
+        b.iter_custom(|iters| {
+            let ms = common::timed_frames(gpu, &mut renderer, scene, camera, iters, &mut totals);
+            Duration::from_secs_f64(ms / 1e3)
+        })
+    });
+    g.finish();
+    Ok(totals)
+}
+
+fn direct_only() -> Effects {
+    Effects { ao: false, radiosity: false, reflections: false, ..Effects::default() }
+}
+
+fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
+    let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,grid-100000");
+    let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
+    let _ = writeln!(out, "## Every pass, full GI frame and direct-only frame\n");
+    let mut ratios = String::from(
+        "| scene | size | GI frame ms | direct-only frame ms | GI / direct-only |\n|---|---|---:|---:|---:|\n",
+    );
+    for name in &scenes {
+        let scene = common::load(name);
+        let camera = scene.camera_or_default();
+        let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
+        for &(w, h) in &sizes {
+            let group = format!("frame/{name}/{w}x{h}");
+            let full =
+                bench_frames(c, gpu, &group, "gi", &buffers, &camera, Settings::with_size(w, h));
+            let settings = Settings { effects: direct_only(), ..Settings::with_size(w, h) };
+            let direct = bench_frames(c, gpu, &group, "direct-only", &buffers, &camera, settings);
+            let (full, direct) = match (full, direct) {
+                (Ok(f), Ok(d)) if f.frames > 0 && d.frames > 0 => (f, d),
+                (Ok(_), Ok(_)) => continue, // filtered out on the command line
+                (Err(e), _) | (_, Err(e)) => {
+                    let _ = writeln!(out, "{name} {w}x{h}: {e}\n");
+                    continue;
+                }
+            };
+            let _ = writeln!(
+                out,
+                "{name} ({} triangles) {w}x{h}\n\n| pass | GI frame ms | direct-only ms |\n|---|---:|---:|",
+                scene.triangle_count()
+            );
+            for pass in full.ms.keys() {
+                let d = if direct.ms.contains_key(pass) {
+                    format!("{:.2}", direct.mean(pass))
+                } else {
+                    "-".into()
+                };
+                let _ = writeln!(out, "| `{pass}` | {:.2} | {d} |", full.mean(pass));
+            }
+            let _ = writeln!(out, "| total | {:.2} | {:.2} |\n", full.frame(), direct.frame());
+            let _ = writeln!(
+                ratios,
+                "| {name} | {w}x{h} | {:.2} | {:.2} | {:.2} |",
+                full.frame(),
+                direct.frame(),
+                full.frame() / direct.frame()
+            );
+        }
+    }
+    out.push_str(&ratios);
+    out.push('\n');
+}
+
+fn triangles(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
+    let counts = common::list("DEEP_GBUFFER_BENCH_TRIANGLES", "1000,10000,100000,1000000,5000000");
+    let (w, h) = (640, 360);
+    let _ = writeln!(
+        out,
+        "## Scaling with triangles (`grid-N`, {w}x{h}, two layers, two-pass)\n\n| triangles | `raster.layer0` ms | `raster.layer1` ms | `resolve` ms |\n|---:|---:|---:|---:|"
+    );
+    let mut points: [Vec<(f64, f64)>; 3] = Default::default();
+    for n in counts {
+        let scene = common::load(&format!("grid-{n}"));
+        let camera = scene.camera_or_default();
+        let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
+        // The raster and the resolve alone: no lighting pass, two layers forced.
+        let effects = Effects { direct: false, shadows: false, ..direct_only() };
+        let settings = Settings { layers: 2, effects, ..Settings::with_size(w, h) };
+        let t = match bench_frames(
+            c,
+            gpu,
+            "triangles",
+            &format!("grid-{n}"),
+            &buffers,
+            &camera,
+            settings,
+        ) {
+            Ok(t) if t.frames > 0 => t,
+            Ok(_) => continue,
+            Err(e) => {
+                let _ = writeln!(out, "| {} | {e} | | |", scene.triangle_count());
+                continue;
+            }
+        };
+        let m = scene.triangle_count() as f64 / 1e6;
+        let row = ["raster.layer0", "raster.layer1", "resolve"].map(|p| t.mean(p));
+        for (points, ms) in points.iter_mut().zip(row) {
+            points.push((m, ms));
+        }
+        let _ = writeln!(
+            out,
+            "| {} | {:.2} | {:.2} | {:.2} |",
+            scene.triangle_count(),
+            row[0],
+            row[1],
+            row[2]
+        );
+    }
+    let slopes = points.each_ref().map(|p| common::fit(p).0);
+    let _ = writeln!(
+        out,
+        "| slope, ms per million triangles | {:.1} | {:.1} | {:.1} |\n",
+        slopes[0], slopes[1], slopes[2]
+    );
+}
+
+fn resolution(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
+    let sizes = common::sizes(
+        "DEEP_GBUFFER_BENCH_RESOLUTIONS",
+        "256x256,640x480,1280x720,1920x1080,2560x1440,3840x2160",
+    );
+    let scene = common::load("cornell");
+    let camera = scene.camera_or_default();
+    let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
+    let mut rows: Vec<((u32, u32), PassTotals)> = Vec::new();
+    let _ = writeln!(out, "## Scaling with resolution (Cornell box, full GI frame)\n");
+    for (w, h) in sizes {
+        match bench_frames(
+            c,
+            gpu,
+            "resolution",
+            &format!("{w}x{h}"),
+            &buffers,
+            &camera,
+            Settings::with_size(w, h),
+        ) {
+            Ok(t) if t.frames > 0 => rows.push(((w, h), t)),
+            Ok(_) => {}
+            Err(e) => {
+                let _ = writeln!(out, "{w}x{h}: {e}\n");
+            }
+        }
+    }
+    let mut names: Vec<&String> = rows.iter().flat_map(|(_, t)| t.ms.keys()).collect();
+    names.sort();
+    names.dedup();
+    let _ = write!(out, "| pass |");
+    for ((w, h), _) in &rows {
+        let _ = write!(out, " {w}x{h} |");
+    }
+    let _ = writeln!(out, " ms per megapixel |\n|---|{}---:|", "---:|".repeat(rows.len()));
+    let per_pixel = |n: &str| !n.starts_with("shadow.");
+    for name in names.iter().map(|n| n.as_str()).chain(["per-pixel passes"]) {
+        let _ = write!(out, "| `{name}` |");
+        let mut points = Vec::new();
+        for ((w, h), t) in &rows {
+            let ms = if name == "per-pixel passes" { t.mean_of(per_pixel) } else { t.mean(name) };
+            points.push((f64::from(w * h) / 1e6, ms));
+            let _ = write!(out, " {ms:.2} |");
+        }
+        let slope =
+            if per_pixel(name) { format!("{:.1}", common::fit(&points).0) } else { "-".into() };
+        let _ = writeln!(out, " {slope} |");
+    }
+    out.push('\n');
+}
+
+fn main() {
+    let gpu =
+        Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
+    let groups = common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution");
+    let mut c = Criterion::default().configure_from_args();
+    let mut out = format!("Device: {}\n\n", gpu.describe());
+    for group in &groups {
+        match group.as_str() {
+            "passes" => passes(&mut c, &gpu, &mut out),
+            "triangles" => triangles(&mut c, &gpu, &mut out),
+            "resolution" => resolution(&mut c, &gpu, &mut out),
+            other => panic!("DEEP_GBUFFER_BENCH_GROUPS: unknown group {other}"),
+        }
+    }
+    c.final_summary();
+    common::write_summary("frame-bench.md", &out);
+}
