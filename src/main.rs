@@ -69,6 +69,24 @@ struct SweepArgs {
     /// G-buffer encodings to sweep.
     #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().precision)]
     precision: Vec<Precision>,
+    /// Radiosity gather radii to sweep, in scene units.
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().radiosity_radius)]
+    radiosity_radius: Vec<f32>,
+    /// Obscurance pyramid level offsets to sweep (a tap at h pixels reads level log2 h - offset).
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().mip_offset)]
+    mip_offset: Vec<u32>,
+    /// Layer separations Δz to sweep, in scene units.
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().dz)]
+    dz: Vec<f32>,
+    /// Layer-1 variants to sweep.
+    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().layer1)]
+    layer1: Vec<Layer1Variant>,
+    /// Resolution scales to sweep (the frame at this fraction of --size, compared at --size).
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().scale)]
+    scale: Vec<f32>,
+    /// Equirectangular EXR that missed rays see (else the scene's ambient sky).
+    #[arg(long)]
+    environment: Option<PathBuf>,
 }
 
 /// The effects the ground-truth tracer computes.
@@ -78,6 +96,10 @@ enum TruthEffect {
     Ao,
     /// Diffuse indirect irradiance by path tracing (--bounces surfaces per path).
     Indirect,
+    /// Mirror reflections: reflectivity times the radiance along the mirror direction.
+    Reflections,
+    /// The full image by path tracing, with the same lights, materials and sky.
+    Full,
 }
 
 #[derive(clap::Args)]
@@ -106,9 +128,13 @@ struct TruthArgs {
     /// Write the truth as PNG (values in [0, 1] shown as they are).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Surfaces along a path for --effect indirect (1: one bounce).
+    /// Surfaces along a path for --effect indirect (1: one bounce); for reflections and full,
+    /// the surfaces after the first.
     #[arg(long, default_value_t = 1)]
     bounces: u32,
+    /// Equirectangular EXR that missed rays see (reflections, full; else the scene's ambient).
+    #[arg(long)]
+    environment: Option<PathBuf>,
     /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
     #[arg(long, default_value_t = 1)]
     frames: u32,
@@ -276,13 +302,21 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let bar = progress_bar(u64::from(h), message);
     let started = std::time::Instant::now();
     let progress = || bar.inc(1);
-    let (spp, seed) = (args.spp, args.seed);
+    let (spp, seed, bounces) = (args.spp, args.seed, args.bounces);
+    let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
+    let env = environment.as_ref();
     let image = match args.effect {
         TruthEffect::Ao => {
             tracer.ambient_obscurance(&scene, &camera, w, h, &ao, spp, seed, &progress)?
         }
         TruthEffect::Indirect => {
-            tracer.indirect(&scene, &camera, w, h, args.bounces, spp, seed, &progress)?
+            tracer.indirect(&scene, &camera, w, h, bounces, spp, seed, &progress)?
+        }
+        TruthEffect::Reflections => {
+            tracer.reflections(&scene, &camera, (w, h), env, bounces, spp, seed, &progress)?
+        }
+        TruthEffect::Full => {
+            tracer.full(&scene, &camera, (w, h), env, bounces, spp, seed, &progress)?
         }
     };
     bar.finish_and_clear();
@@ -307,6 +341,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
         let settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
         let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
+        renderer.set_environment(&gpu.device, env)?;
         if args.frames == 0 {
             return Err(Error::InvalidSetting {
                 name: "frames",
@@ -325,6 +360,12 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
                 &deep_gbuffer::sweep::RADIOSITY_PASSES,
                 "radiosity",
             ),
+            TruthEffect::Reflections => (
+                renderer.reflections_buffer(),
+                &deep_gbuffer::sweep::REFLECTION_PASSES,
+                "reflections",
+            ),
+            TruthEffect::Full => (renderer.hdr_buffer(), &[][..], "image"),
         };
         let Some(buffer) = buffer else {
             return Err(Error::InvalidSetting {
@@ -337,13 +378,27 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         let estimate: Vec<Vec3> = match args.effect {
             TruthEffect::Ao => values.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
             TruthEffect::Indirect => deep_gbuffer::truth::metrics::weighted_irradiance(&values, n),
+            TruthEffect::Reflections | TruthEffect::Full => {
+                values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+            }
         };
         let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
         let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
         let stats = deep_gbuffer::truth::metrics::compare(&estimate, &mask, &image);
         let timings = renderer.timings(&gpu.device)?;
-        let ms: f64 =
-            timings.iter().filter(|t| passes.contains(&t.name.as_str())).map(|t| t.ms).sum();
+        // The image costs the whole frame.
+        let ms: f64 = timings
+            .iter()
+            .filter(|t| passes.is_empty() || passes.contains(&t.name.as_str()))
+            .map(|t| t.ms)
+            .sum();
+        let passes: &[&str] = if passes.is_empty() { &["every pass"] } else { passes };
+        if args.effect == TruthEffect::Full {
+            let seen: Vec<bool> = mask.iter().zip(&image.visible).map(|(a, b)| *a && *b).collect();
+            let ssim =
+                deep_gbuffer::truth::metrics::ssim(&estimate, &image.value, &seen, (w, h), 1.0);
+            println!("gpu image: SSIM {ssim:.4} against the truth (tone-mapped luminance)");
+        }
         println!(
             "gpu {what}: rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}, mean {:.4} vs truth {:.4}); {} {:.3} ms on {}",
             stats.rmse,
@@ -377,36 +432,48 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_samples: args.radiosity_samples,
         layers: args.layers,
         precision: args.precision,
+        radiosity_radius: args.radiosity_radius,
+        mip_offset: args.mip_offset,
+        dz: args.dz,
+        layer1: args.layer1,
+        scale: args.scale,
     };
-    if let Some(l) = grid.layers.iter().find(|l| !(1..=2).contains(*l)) {
-        return Err(Error::InvalidSetting { name: "layers", message: format!("{l} (1 or 2)") });
-    }
     let configurations = grid.configurations();
     for k in &configurations {
-        k.settings(w, h).validate()?;
+        k.validate(w, h)?;
     }
+    let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
     let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
-    let bar = progress_bar(u64::from(2 * h), format!("ground truth, {} rays per pixel", args.spp));
-    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, &|| bar.inc(1))?;
+    let bar = progress_bar(
+        sweep::Truth::rows(&scene, h),
+        format!("ground truth, {} rays per pixel", args.spp),
+    );
+    let env = environment.as_ref();
+    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, env, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let bar = progress_bar(configurations.len() as u64, "configurations".into());
     let mut rows = Vec::new();
     for k in &configurations {
-        rows.push(sweep::measure(&gpu.device, &gpu.queue, &buffers, &camera, &truth, k)?);
+        rows.push(sweep::measure(&gpu.device, &gpu.queue, &buffers, &camera, &truth, k, env)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
     let heading = format!(
-        "Sweep of {} at {w}x{h} on {}; truth {} rays per pixel (noise: obscurance {:.4}, irradiance {:.4})",
+        "Sweep of {} at {w}x{h} on {}; truth {} rays per pixel, {} bounces (noise: obscurance {:.4}, irradiance {:.4}, image {:.4}); {} settling and {} measured frames turning {} degrees each",
         args.scene,
         gpu.describe(),
         args.spp,
+        sweep::TRUTH_BOUNCES,
         truth.ao.mean_stderr(),
-        truth.indirect.mean_stderr()
+        truth.indirect.mean_stderr(),
+        truth.full.mean_stderr(),
+        sweep::SETTLE_FRAMES,
+        sweep::MEASURED_FRAMES,
+        sweep::MOTION_DEGREES
     );
     sweep::write_csv(&args.out.join("sweep.csv"), &rows)?;
     sweep::write_markdown(&args.out.join("sweep.md"), &rows, &heading)?;
@@ -534,9 +601,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     }
     let start = camera.clone();
     for i in 0..args.frames {
-        let angle = (args.orbit * i as f32 / args.frames as f32).to_radians();
-        camera.eye = start.target
-            + glam::Quat::from_axis_angle(start.up.normalize(), angle) * (start.eye - start.target);
+        camera = start.orbited(args.orbit * i as f32 / args.frames as f32);
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
             let hdr = renderer.read_rgb(

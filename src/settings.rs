@@ -104,6 +104,10 @@ pub struct AoSettings {
     pub two_layers: bool,
     /// Radius of the bilateral blur in pixels (0: no blur).
     pub blur_radius: u32,
+    /// How far below the tap distance the depth pyramid is read: a tap at distance h pixels
+    /// reads level floor(log2 h) - `mip_offset` (the paper's log q'); smaller reads coarser
+    /// levels (faster, cache-friendlier, blurrier depth), larger finer ones. 0 to 8.
+    pub mip_offset: u32,
 }
 
 impl Default for AoSettings {
@@ -116,6 +120,7 @@ impl Default for AoSettings {
             intensity: 1.0,
             two_layers: true,
             blur_radius: 4,
+            mip_offset: 3,
         }
     }
 }
@@ -145,6 +150,12 @@ impl AoSettings {
             return Err(Error::setting(
                 "ao.intensity",
                 format!("{} (must be finite and >= 0)", self.intensity),
+            ));
+        }
+        if self.mip_offset > 8 {
+            return Err(Error::setting(
+                "ao.mip_offset",
+                format!("{} (at most 8)", self.mip_offset),
             ));
         }
         if self.blur_radius > 32 {

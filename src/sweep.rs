@@ -1,21 +1,34 @@
 //! What accuracy costs in time: render a grid of configurations of one scene and camera, time
 //! every pass with GPU timestamps, and measure each effect's error against ground truth
-//! ([`crate::truth`]).
+//! ([`crate::truth`]) and its stability from frame to frame.
 //!
-//! The effects measured are the ambient visibility (against world-space obscurance with the same
-//! radius and falloff) and the radiosity irradiance of a first frame as the composite weighs it,
-//! confidence times E (against one-bounce
-//! diffuse indirect irradiance: a first frame gathers B = direct + emission, one bounce). Each
-//! configuration renders a first frame (which warms caches and pipelines), then three more, each from an empty history, and keeps the
-//! median time of each pass; the estimate is the same every time.
+//! Each configuration renders a slow camera move that ends at the measured camera: a warm-up
+//! frame (pipelines), then [`SETTLE_FRAMES`] frames that let the temporal radiosity gather its
+//! bounces, then [`MEASURED_FRAMES`] frames, turning [`MOTION_DEGREES`] about the target per
+//! frame. The measured frames give the time of each pass (the median), the temporal instability
+//! of each effect (the mean frame-to-frame change at the same surface point,
+//! [`metrics::temporal_change`]), and the last one, seen from the measured camera, the errors:
+//!
+//! - obscurance: AV after the blur against world-space obscurance with the same radius and
+//!   falloff;
+//! - radiosity: the irradiance the composite takes from it (confidence times E) against diffuse
+//!   indirect irradiance path traced with [`TRUTH_BOUNCES`] bounces (the temporal gather adds
+//!   one bounce a frame);
+//! - reflections (scenes with a reflective material): the reflected radiance against traced
+//!   mirror reflections;
+//! - the final image: RMSE, MAE and SSIM against the path-traced full image.
+//!
+//! The estimates are the same on every run, so re-running a sweep gives the same errors.
 
 use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
 
+use crate::environment::Environment;
+use crate::gbuffer::GBufferLayer;
 use crate::scene::{Camera, Scene};
-use crate::settings::{AoSettings, Precision, RadiositySettings, Settings};
+use crate::settings::{AoSettings, Layer1Variant, Precision, RadiositySettings, Settings};
 use crate::truth::metrics::{self, ErrorStats};
 use crate::truth::{Tracer, TruthImage};
 use crate::{Error, Renderer, Result, SceneBuffers};
@@ -31,26 +44,61 @@ pub struct Knobs {
     pub layers: u32,
     /// G-buffer encoding.
     pub precision: Precision,
+    /// Radiosity gather radius, in scene units. (The obscurance radius is not a knob: it
+    /// defines the quantity, and the truth is traced with it.)
+    pub radiosity_radius: f32,
+    /// Obscurance pyramid level offset ([`AoSettings::mip_offset`]).
+    pub mip_offset: u32,
+    /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
+    pub dz: f32,
+    /// How layer 1 is rasterized.
+    pub layer1: Layer1Variant,
+    /// Resolution scale: the frame is rendered at this fraction of the truth's size and its
+    /// outputs are compared at the truth's pixels (nearest).
+    pub scale: f32,
 }
 
 impl Knobs {
-    /// The renderer settings of this configuration at `width` x `height`.
+    /// The renderer settings of this configuration for a `width` x `height` image (the size
+    /// [`Knobs::size`] gives).
     pub fn settings(&self, width: u32, height: u32) -> Settings {
         Settings {
             layers: self.layers,
             precision: self.precision,
+            dz: self.dz,
+            layer1: self.layer1,
             ao: AoSettings {
                 samples: self.ao_samples,
                 two_layers: self.layers == 2,
+                mip_offset: self.mip_offset,
                 ..AoSettings::default()
             },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
+                radius: self.radiosity_radius,
                 ..RadiositySettings::default()
             },
             timings: true,
             ..Settings::with_size(width, height)
         }
+    }
+
+    /// The size this configuration renders for a truth of `width` x `height`.
+    pub fn size(&self, width: u32, height: u32) -> (u32, u32) {
+        let side = |n: u32| ((n as f32 * self.scale).round() as u32).max(1);
+        (side(width), side(height))
+    }
+
+    /// Checks the knobs (and the settings they make) for a truth of `width` x `height`.
+    pub fn validate(&self, width: u32, height: u32) -> Result<()> {
+        if !(self.scale > 0.0 && self.scale <= 1.0) {
+            return Err(Error::setting("scale", format!("{} (must be in (0, 1])", self.scale)));
+        }
+        if !(1..=2).contains(&self.layers) {
+            return Err(Error::setting("layers", format!("{} (1 or 2)", self.layers)));
+        }
+        let (w, h) = self.size(width, height);
+        self.settings(w, h).validate()
     }
 }
 
@@ -65,15 +113,31 @@ pub struct Grid {
     pub layers: Vec<u32>,
     /// Encodings.
     pub precision: Vec<Precision>,
+    /// Radiosity gather radii.
+    pub radiosity_radius: Vec<f32>,
+    /// Obscurance pyramid level offsets.
+    pub mip_offset: Vec<u32>,
+    /// Layer separations.
+    pub dz: Vec<f32>,
+    /// Layer-1 variants.
+    pub layer1: Vec<Layer1Variant>,
+    /// Resolution scales.
+    pub scale: Vec<f32>,
 }
 
 impl Default for Grid {
     fn default() -> Self {
+        let settings = Settings::default();
         Grid {
             ao_samples: vec![4, 8, 11, 16, 24, 32],
             radiosity_samples: vec![5, 9, 13, 19, 27],
             layers: vec![1, 2],
-            precision: vec![Precision::Full, Precision::Packed],
+            precision: vec![Precision::Full],
+            radiosity_radius: vec![settings.radiosity.radius],
+            mip_offset: vec![settings.ao.mip_offset],
+            dz: vec![settings.dz],
+            layer1: vec![settings.layer1],
+            scale: vec![1.0],
         }
     }
 }
@@ -82,11 +146,31 @@ impl Grid {
     /// Every configuration, in a fixed order.
     pub fn configurations(&self) -> Vec<Knobs> {
         let mut out = Vec::new();
-        for &precision in &self.precision {
-            for &layers in &self.layers {
-                for &ao_samples in &self.ao_samples {
-                    for &radiosity_samples in &self.radiosity_samples {
-                        out.push(Knobs { ao_samples, radiosity_samples, layers, precision });
+        for &scale in &self.scale {
+            for &precision in &self.precision {
+                for &layer1 in &self.layer1 {
+                    for &dz in &self.dz {
+                        for &mip_offset in &self.mip_offset {
+                            for &radiosity_radius in &self.radiosity_radius {
+                                for &layers in &self.layers {
+                                    for &ao_samples in &self.ao_samples {
+                                        for &radiosity_samples in &self.radiosity_samples {
+                                            out.push(Knobs {
+                                                ao_samples,
+                                                radiosity_samples,
+                                                layers,
+                                                precision,
+                                                radiosity_radius,
+                                                mip_offset,
+                                                dz,
+                                                layer1,
+                                                scale,
+                                            });
+                                        }
+                                    }
+                                }
+                            }
+                        }
                     }
                 }
             }
@@ -95,31 +179,68 @@ impl Grid {
     }
 }
 
+/// Bounces of the path-traced indirect light and full image: the temporal gather adds one a
+/// frame, and a sweep renders more frames than this before it measures.
+pub const TRUTH_BOUNCES: u32 = 10;
+
 /// The ground truth a sweep compares with.
 pub struct Truth {
     /// World-space obscurance (the default radius and falloff).
     pub ao: TruthImage,
-    /// One-bounce diffuse indirect irradiance.
+    /// Diffuse indirect irradiance, [`TRUTH_BOUNCES`] bounces.
     pub indirect: TruthImage,
+    /// Mirror reflections, when the scene has a reflective material.
+    pub reflections: Option<TruthImage>,
+    /// The full image.
+    pub full: TruthImage,
 }
 
 impl Truth {
-    /// Traces both truths of `scene` from `camera` at `width` x `height` with `spp` rays per
-    /// pixel (`progress` is called once per finished row of each).
+    /// Rows of the image [`Truth::trace`] traces for `scene` (what its progress counts).
+    pub fn rows(scene: &Scene, height: u32) -> u64 {
+        u64::from(height) * if crate::SceneInfo::of(scene).reflective { 4 } else { 3 }
+    }
+
+    /// Traces every truth of `scene` from `camera` at `width` x `height` with `spp` rays per
+    /// pixel; missed rays see `environment` (else the scene's ambient). `progress` is called
+    /// once per finished row of each image.
     pub fn trace(
         scene: &Scene,
         camera: &Camera,
-        (width, height): (u32, u32),
+        size: (u32, u32),
         spp: u32,
+        environment: Option<&Environment>,
         progress: &(dyn Fn() + Sync),
     ) -> Result<Truth> {
         let tracer = Tracer::new(scene)?;
+        let (w, h) = size;
         let ao = AoSettings::default();
+        let bounces = TRUTH_BOUNCES;
+        let reflections = if crate::SceneInfo::of(scene).reflective {
+            Some(tracer.reflections(scene, camera, size, environment, bounces, spp, 3, progress)?)
+        } else {
+            None
+        };
         Ok(Truth {
-            ao: tracer.ambient_obscurance(scene, camera, width, height, &ao, spp, 1, progress)?,
-            indirect: tracer.indirect(scene, camera, width, height, 1, spp, 2, progress)?,
+            ao: tracer.ambient_obscurance(scene, camera, w, h, &ao, spp, 1, progress)?,
+            indirect: tracer.indirect(scene, camera, w, h, bounces, spp, 2, progress)?,
+            reflections,
+            full: tracer.full(scene, camera, size, environment, bounces, spp, 4, progress)?,
         })
     }
+}
+
+/// Mean frame-to-frame change of each effect over the measured frames.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Instability {
+    /// AV.
+    pub ao: f32,
+    /// Confidence times E.
+    pub indirect: f32,
+    /// Reflected radiance (0 without reflections).
+    pub reflections: f32,
+    /// The final HDR image (its view-dependent highlights move with the camera too).
+    pub image: f32,
 }
 
 /// One measured configuration.
@@ -135,6 +256,14 @@ pub struct Row {
     pub ao: ErrorStats,
     /// Radiosity error (the irradiance the composite takes from it: confidence times E).
     pub indirect: ErrorStats,
+    /// Reflection error, when the scene reflects.
+    pub reflections: Option<ErrorStats>,
+    /// Error of the final image.
+    pub full: ErrorStats,
+    /// SSIM of the final image against the truth (1: identical).
+    pub ssim: f32,
+    /// Temporal instability per effect.
+    pub instability: Instability,
 }
 
 impl Row {
@@ -144,7 +273,59 @@ impl Row {
     }
 }
 
-/// Renders and measures one configuration.
+/// What one frame produced, read back.
+struct Snapshot {
+    layer0: GBufferLayer,
+    av: Vec<Vec3>,
+    indirect: Vec<Vec3>,
+    reflections: Option<Vec<Vec3>>,
+    hdr: Vec<Vec3>,
+}
+
+impl Snapshot {
+    fn read(renderer: &Renderer, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Snapshot> {
+        let s = renderer.settings();
+        let n = (s.width * s.height) as usize;
+        let missing = |what: &str| Error::InvalidSetting {
+            name: "sweep",
+            message: format!("the scene's plan runs no {what}: nothing to measure"),
+        };
+        let av = renderer.ao_buffer().ok_or_else(|| missing("obscurance"))?;
+        let av = renderer.read_f32(device, queue, av)?;
+        let radiosity = renderer.radiosity_buffers().ok_or_else(|| missing("radiosity"))?;
+        let e = renderer.read_f32(device, queue, radiosity[4])?;
+        let rgb = |buffer: &wgpu::Buffer| renderer.read_rgb(device, queue, buffer);
+        Ok(Snapshot {
+            layer0: renderer.read_gbuffer(device, queue, 0)?,
+            av: av.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
+            indirect: metrics::weighted_irradiance(&e, n),
+            reflections: renderer.reflections_buffer().map(rgb).transpose()?,
+            hdr: rgb(renderer.hdr_buffer().ok_or_else(|| missing("composite"))?)?,
+        })
+    }
+}
+
+/// Frames of the camera move before the measured ones (the temporal radiosity settles).
+pub const SETTLE_FRAMES: usize = 10;
+/// Frames measured (times, instability); the last one is compared with the truth.
+pub const MEASURED_FRAMES: usize = 4;
+/// Degrees the camera turns about its target per frame of the move.
+pub const MOTION_DEGREES: f32 = 0.25;
+
+/// `values` of a `from` = (w, h) image at the pixels of a `to` image (nearest pixel centre).
+fn resample<T: Copy>(values: &[T], from: (u32, u32), to: (u32, u32)) -> Vec<T> {
+    if from == to {
+        return values.to_vec();
+    }
+    let pick =
+        |i: u32, n: u32, m: u32| (((i as f32 + 0.5) * n as f32 / m as f32) as u32).min(n - 1);
+    (0..to.1)
+        .flat_map(|y| (0..to.0).map(move |x| (x, y)))
+        .map(|(x, y)| values[(pick(y, from.1, to.1) * from.0 + pick(x, from.0, to.0)) as usize])
+        .collect()
+}
+
+/// Renders and measures one configuration; missed reflection rays see `environment`.
 pub fn measure(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -152,18 +333,41 @@ pub fn measure(
     camera: &Camera,
     truth: &Truth,
     knobs: &Knobs,
+    environment: Option<&Environment>,
 ) -> Result<Row> {
-    let (w, h) = (truth.ao.width, truth.ao.height);
-    let mut renderer = Renderer::new(device, queue, knobs.settings(w, h))?;
-    // A first frame warms pipelines and caches; then TIMED_FRAMES first frames (the history
-    // reset before each), and per pass the median of their times.
-    renderer.render(device, queue, scene, camera)?;
+    let target = (truth.full.width, truth.full.height);
+    let size = knobs.size(target.0, target.1);
+    let mut renderer = Renderer::new(device, queue, knobs.settings(size.0, size.1))?;
+    renderer.set_environment(device, environment)?;
+    let frames = SETTLE_FRAMES + MEASURED_FRAMES;
+    let at = |i: usize| camera.orbited(-MOTION_DEGREES * (frames - 1 - i) as f32);
+    // A warm-up frame builds the pipelines; the move starts from an empty history.
+    renderer.render(device, queue, scene, &at(0))?;
+    renderer.reset_history();
     let mut runs: Vec<Vec<crate::gpu::PassTiming>> = Vec::new();
-    for _ in 0..TIMED_FRAMES {
-        renderer.reset_history();
-        renderer.render(device, queue, scene, camera)?;
-        runs.push(renderer.timings(device)?);
+    let mut changes = [0.0f64; 4];
+    let mut previous: Option<Snapshot> = None;
+    for i in 0..frames {
+        renderer.render(device, queue, scene, &at(i))?;
+        if i < SETTLE_FRAMES - 1 {
+            continue;
+        }
+        let now = Snapshot::read(&renderer, device, queue)?;
+        if let Some(before) = &previous {
+            runs.push(renderer.timings(device)?);
+            let change = |a: &[Vec3], b: &[Vec3]| {
+                f64::from(metrics::temporal_change(a, b, &before.layer0, &now.layer0).0)
+            };
+            changes[0] += change(&before.av, &now.av);
+            changes[1] += change(&before.indirect, &now.indirect);
+            if let (Some(a), Some(b)) = (&before.reflections, &now.reflections) {
+                changes[2] += change(a, b);
+            }
+            changes[3] += change(&before.hdr, &now.hdr);
+        }
+        previous = Some(now);
     }
+    let last = previous.expect("at least one measured frame");
     let timings: Vec<(String, f64)> = runs[0]
         .iter()
         .enumerate()
@@ -173,29 +377,32 @@ pub fn measure(
             (t.name.clone(), ms[ms.len() / 2])
         })
         .collect();
-    let layer0 = renderer.read_gbuffer(device, queue, 0)?;
-    let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
-    let n = (w * h) as usize;
-    let missing = |what: &str| Error::InvalidSetting {
-        name: "sweep",
-        message: format!("the scene's plan runs no {what}: nothing to measure"),
-    };
-    let av = renderer.read_f32(
-        device,
-        queue,
-        renderer.ao_buffer().ok_or_else(|| missing("obscurance"))?,
-    )?;
-    let av: Vec<Vec3> = av.iter().take(n).map(|v| Vec3::splat(*v)).collect();
-    let radiosity = renderer.radiosity_buffers().ok_or_else(|| missing("radiosity"))?;
-    let e = renderer.read_f32(device, queue, radiosity[4])?;
-    let e = crate::truth::metrics::weighted_irradiance(&e, n);
+    let up = |values: &[Vec3]| resample(values, size, target);
+    let mask: Vec<bool> =
+        resample(&last.layer0.samples, size, target).iter().map(|s| s.depth > 0.0).collect();
+    let hdr = up(&last.hdr);
+    let seen: Vec<bool> = mask.iter().zip(&truth.full.visible).map(|(a, b)| *a && *b).collect();
+    let n = MEASURED_FRAMES as f64;
+    let instability = |i: usize| (changes[i] / n) as f32;
     let passes = timings;
     Ok(Row {
         knobs: knobs.clone(),
         total_ms: passes.iter().map(|(_, ms)| ms).sum(),
         passes,
-        ao: metrics::compare(&av, &mask, &truth.ao),
-        indirect: metrics::compare(&e, &mask, &truth.indirect),
+        ao: metrics::compare(&up(&last.av), &mask, &truth.ao),
+        indirect: metrics::compare(&up(&last.indirect), &mask, &truth.indirect),
+        reflections: match (&last.reflections, &truth.reflections) {
+            (Some(r), Some(t)) => Some(metrics::compare(&up(r), &mask, t)),
+            _ => None,
+        },
+        full: metrics::compare(&hdr, &mask, &truth.full),
+        ssim: metrics::ssim(&hdr, &truth.full.value, &seen, target, 1.0),
+        instability: Instability {
+            ao: instability(0),
+            indirect: instability(1),
+            reflections: instability(2),
+            image: instability(3),
+        },
     })
 }
 
@@ -225,8 +432,12 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
+/// The passes whose time the reflections cost.
+pub const REFLECTION_PASSES: [&str; 1] = ["reflections"];
+
 /// Writes `rows` as CSV: the knobs, every pass's ms (one column per pass name), the total, and
-/// each effect's RMSE, MAE and the truth's noise floor.
+/// per effect its RMSE, MAE, the truth's noise floor and the temporal instability (reflection
+/// columns only when the scene reflects); for the final image also its SSIM.
 pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut names: Vec<&str> = Vec::new();
     for r in rows {
@@ -236,69 +447,128 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             }
         }
     }
-    let mut out = String::from("ao_samples,radiosity_samples,layers,precision");
+    let reflective = rows.iter().any(|r| r.reflections.is_some());
+    let mut out = String::from(
+        "ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,dz,layer1,scale",
+    );
     for n in &names {
         out += &format!(",ms_{n}");
     }
-    out += ",total_ms,ao_ms,radiosity_ms,ao_rmse,ao_mae,ao_truth_stderr,indirect_rmse,indirect_mae,indirect_truth_stderr\n";
+    out += ",total_ms,ao_ms,radiosity_ms";
+    if reflective {
+        out += ",reflections_ms";
+    }
+    let effects: &[&str] = if reflective {
+        &["ao", "indirect", "reflections", "image"]
+    } else {
+        &["ao", "indirect", "image"]
+    };
+    for e in effects {
+        out += &format!(",{e}_rmse,{e}_mae,{e}_truth_stderr,{e}_instability");
+    }
+    out += ",image_ssim\n";
     for r in rows {
         let k = &r.knobs;
-        out += &format!("{},{},{},{:?}", k.ao_samples, k.radiosity_samples, k.layers, k.precision);
+        out += &format!(
+            "{},{},{},{:?},{},{},{},{:?},{}",
+            k.ao_samples,
+            k.radiosity_samples,
+            k.layers,
+            k.precision,
+            k.radiosity_radius,
+            k.mip_offset,
+            k.dz,
+            k.layer1,
+            k.scale
+        );
         for n in &names {
             let ms = r.passes.iter().find(|(p, _)| p == n).map_or(0.0, |(_, ms)| *ms);
             out += &format!(",{ms:.4}");
         }
         out += &format!(
-            ",{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5}\n",
+            ",{:.4},{:.4},{:.4}",
             r.total_ms,
             r.ms_of(&AO_PASSES),
-            r.ms_of(&RADIOSITY_PASSES),
-            r.ao.rmse,
-            r.ao.mae,
-            r.ao.truth_stderr,
-            r.indirect.rmse,
-            r.indirect.mae,
-            r.indirect.truth_stderr
+            r.ms_of(&RADIOSITY_PASSES)
         );
+        if reflective {
+            out += &format!(",{:.4}", r.ms_of(&REFLECTION_PASSES));
+        }
+        let i = &r.instability;
+        let mut stats = vec![(r.ao, i.ao), (r.indirect, i.indirect)];
+        if reflective {
+            stats.push((r.reflections.unwrap_or_default(), i.reflections));
+        }
+        stats.push((r.full, i.image));
+        for (e, flicker) in stats {
+            out += &format!(",{:.5},{:.5},{:.5},{:.5}", e.rmse, e.mae, e.truth_stderr, flicker);
+        }
+        out += &format!(",{:.4}\n", r.ssim);
     }
     std::fs::write(path, out).map_err(|e| Error::io(path, e))
 }
 
-/// Writes `rows` as a Markdown table (the CSV's main columns; Pareto-optimal rows per effect
-/// marked), headed by what was measured where.
+/// The (ms, RMSE) points of one effect, in row order.
+fn points(rows: &[Row], ms: impl Fn(&Row) -> f64, error: impl Fn(&Row) -> f32) -> Vec<(f64, f64)> {
+    rows.iter().map(|r| (ms(r), f64::from(error(r)))).collect()
+}
+
+/// Writes `rows` as a Markdown table (the knobs that vary, each effect's ms and RMSE, the final
+/// image's RMSE, SSIM and instability; Pareto-optimal rows per effect marked), headed by what
+/// was measured where.
 pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
-    let ao_front = pareto_front(
-        &rows.iter().map(|r| (r.ms_of(&AO_PASSES), f64::from(r.ao.rmse))).collect::<Vec<_>>(),
-    );
-    let rad_front = pareto_front(
-        &rows
-            .iter()
-            .map(|r| (r.ms_of(&RADIOSITY_PASSES), f64::from(r.indirect.rmse)))
-            .collect::<Vec<_>>(),
-    );
+    let ao_front = pareto_front(&points(rows, |r| r.ms_of(&AO_PASSES), |r| r.ao.rmse));
+    let rad_front =
+        pareto_front(&points(rows, |r| r.ms_of(&RADIOSITY_PASSES), |r| r.indirect.rmse));
+    let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
+    // Knob columns: the tap counts and layers always, the others where the grid varies them.
+    type Column = (&'static str, fn(&Knobs) -> String);
+    let optional: [Column; 6] = [
+        ("precision", |k| format!("{:?}", k.precision)),
+        ("radiosity radius", |k| k.radiosity_radius.to_string()),
+        ("MIP offset", |k| k.mip_offset.to_string()),
+        ("Δz", |k| k.dz.to_string()),
+        ("layer 1", |k| format!("{:?}", k.layer1)),
+        ("scale", |k| k.scale.to_string()),
+    ];
+    let varying: Vec<&Column> = optional
+        .iter()
+        .filter(|(_, f)| rows.iter().any(|r| f(&r.knobs) != f(&rows[0].knobs)))
+        .collect();
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut out = format!("{heading}\n\n");
-    out += "| AO taps | radiosity taps | layers | precision | AO ms | AO RMSE | radiosity ms | indirect RMSE | frame ms |\n";
-    out += "|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+    let mut out = format!("{heading}\n\n| AO taps | radiosity taps | layers |");
+    for (name, _) in &varying {
+        out += &format!(" {name} |");
+    }
+    out += " AO ms | AO RMSE | radiosity ms | indirect RMSE | frame ms | image RMSE | SSIM | AO instability | indirect instability |\n";
+    out += &format!(
+        "|---:|---:|---:|{}---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "---|".repeat(varying.len())
+    );
     for (i, r) in rows.iter().enumerate() {
         let k = &r.knobs;
         let mark = |front: &[usize]| if front.contains(&i) { " *" } else { "" };
+        out += &format!("| {} | {} | {} |", k.ao_samples, k.radiosity_samples, k.layers);
+        for (_, value) in &varying {
+            out += &format!(" {} |", value(k));
+        }
         out += &format!(
-            "| {} | {} | {} | {:?} | {:.2} | {:.4}{} | {:.2} | {:.4}{} | {:.2} |\n",
-            k.ao_samples,
-            k.radiosity_samples,
-            k.layers,
-            k.precision,
+            " {:.2} | {:.4}{} | {:.2} | {:.4}{} | {:.2} | {:.4}{} | {:.3} | {:.5} | {:.5} |\n",
             r.ms_of(&AO_PASSES),
             r.ao.rmse,
             mark(&ao_front),
             r.ms_of(&RADIOSITY_PASSES),
             r.indirect.rmse,
             mark(&rad_front),
-            r.total_ms
+            r.total_ms,
+            r.full.rmse,
+            mark(&image_front),
+            r.ssim,
+            r.instability.ao,
+            r.instability.indirect
         );
     }
-    out += "\n`*`: on the Pareto front of that effect (no configuration is both faster and more accurate).\n";
+    out += "\n`*`: on the Pareto front of that effect (no configuration is both faster and more accurate); the image's front is over the whole frame's time.\n";
     f.write_all(out.as_bytes()).map_err(|e| Error::io(path, e))
 }
 
@@ -306,8 +576,8 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
 /// Draws `pareto.png`: for each effect, every configuration's relative error (RMSE over the
-/// truth's mean) against the GPU milliseconds of that effect's passes, and its Pareto front as a
-/// line.
+/// truth's mean) against the GPU milliseconds of that effect's passes (the final image: of the
+/// whole frame), and its Pareto front as a line.
 pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
     use plotters::prelude::*;
     let fail =
@@ -315,27 +585,35 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
     // Registering twice is harmless; the first registration stays.
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
     type Series = (&'static str, RGBColor, Vec<(f64, f64)>);
-    let series: [Series; 2] = [
+    let relative = |e: &ErrorStats| e.rmse / e.truth_mean.max(1e-9);
+    let mut series: Vec<Series> = vec![
         (
             "ambient obscurance",
             RGBColor(31, 119, 180),
-            rows.iter()
-                .map(|r| (r.ms_of(&AO_PASSES), f64::from(r.ao.rmse / r.ao.truth_mean.max(1e-9))))
-                .collect(),
+            points(rows, |r| r.ms_of(&AO_PASSES), |r| relative(&r.ao)),
         ),
         (
-            "radiosity (one bounce)",
+            "radiosity (multi-bounce)",
             RGBColor(214, 39, 40),
-            rows.iter()
-                .map(|r| {
-                    (
-                        r.ms_of(&RADIOSITY_PASSES),
-                        f64::from(r.indirect.rmse / r.indirect.truth_mean.max(1e-9)),
-                    )
-                })
-                .collect(),
+            points(rows, |r| r.ms_of(&RADIOSITY_PASSES), |r| relative(&r.indirect)),
         ),
     ];
+    if rows.iter().all(|r| r.reflections.is_some()) {
+        series.push((
+            "reflections",
+            RGBColor(44, 160, 44),
+            points(
+                rows,
+                |r| r.ms_of(&REFLECTION_PASSES),
+                |r| relative(&r.reflections.unwrap_or_default()),
+            ),
+        ));
+    }
+    series.push((
+        "final image (whole frame)",
+        RGBColor(90, 90, 90),
+        points(rows, |r| r.total_ms, |r| relative(&r.full)),
+    ));
     let all = series.iter().flat_map(|s| s.2.iter());
     let (x_max, y_min, y_max) = all
         .fold((0.0f64, f64::MAX, 0.0f64), |(x, lo, hi), p| (x.max(p.0), lo.min(p.1), hi.max(p.1)));

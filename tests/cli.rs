@@ -164,13 +164,28 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         assert_eq!(values.len(), 24 * 18);
         assert!(values.iter().all(|v| (0.0..=1.0).contains(v)), "{file}");
     }
+    // The full image and the reflections (the sphere field has mirrors), with the GPU's error
+    // and, for the image, its SSIM.
+    for (effect, scene, expect) in
+        [("full", "builtin:cornell", "SSIM"), ("reflections", "builtin:grid-20000", "rmse")]
+    {
+        let output = cli()
+            .args(["truth", scene, "--effect", effect, "--size", "24x18", "--spp", "2"])
+            .args(["--bounces", "2", "--compare"])
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert!(stdout.contains(expect) && stdout.contains(" ms on "), "{effect}: {stdout}");
+    }
     let bad = cli().args(["truth", "--spp", "0"]).output().unwrap();
     assert_eq!(bad.status.code(), Some(1));
     assert_eq!(String::from_utf8_lossy(&bad.stderr).trim().lines().count(), 1);
 }
 
 /// `sweep` on a tiny grid writes a well-formed CSV (one row per configuration, every value a
-/// number), the Markdown table and the plot; re-running it gives the same errors.
+/// number, every effect's error, instability and the image's SSIM), the Markdown table and the
+/// plot; re-running it gives the same errors.
 #[test]
 fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
     let run = |name: &str| {
@@ -193,10 +208,14 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
         let rows: Vec<Vec<String>> =
             lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
         assert_eq!(rows.len(), 4, "2 tap counts x 2 layer counts");
+        for column in ["ao_rmse", "indirect_instability", "image_rmse", "image_ssim", "ms_resolve"]
+        {
+            assert!(header.contains(&column), "{column} in {header:?}");
+        }
         for row in &rows {
             assert_eq!(row.len(), header.len());
             for (h, v) in header.iter().zip(row) {
-                if *h != "precision" {
+                if *h != "precision" && *h != "layer1" {
                     let x: f64 = v.parse().unwrap_or_else(|_| panic!("{h} = {v}"));
                     assert!(x.is_finite() && x >= 0.0, "{h} = {v}");
                 }
@@ -208,7 +227,9 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
                 header
                     .iter()
                     .zip(r)
-                    .filter(|(h, _)| h.ends_with("rmse") || h.ends_with("mae"))
+                    .filter(|(h, _)| {
+                        ["rmse", "mae", "ssim", "instability"].iter().any(|e| h.ends_with(e))
+                    })
                     .map(|(_, v)| v.clone())
                     .collect::<Vec<_>>()
                     .join(",")

@@ -149,3 +149,223 @@ fn indirect_light_in_a_closed_white_box_has_the_closed_form() {
     }
     assert!(tracer.indirect(&scene, &camera, 4, 4, 0, 4, 1, &|| ()).is_err(), "zero bounces");
 }
+
+/// The full image inside the same box: the camera sees L = Le (1 + rho + ... + rho^bounces)
+/// (the first surface's emission, then `bounces` more surfaces along every path), no noise.
+#[test]
+fn the_full_image_in_a_closed_white_box_has_the_closed_form() {
+    let (rho, le) = (0.5f32, 1.0f32);
+    let scene = common::white_box(rho, le);
+    let camera =
+        Camera::perspective(Vec3::new(0.3, 0.2, 0.6), Vec3::new(-1.0, -0.8, -1.0), 70.0, 0.01);
+    let tracer = Tracer::new(&scene).unwrap();
+    for bounces in [0, 2, 5] {
+        let image = tracer.full(&scene, &camera, (12, 9), None, bounces, 8, 1, &|| ()).unwrap();
+        let expected = le * (0..=bounces).map(|i| rho.powi(i as i32)).sum::<f32>();
+        assert!(image.visible.iter().all(|v| *v), "the box fills the view");
+        for (v, se) in image.value.iter().zip(&image.stderr) {
+            assert!((v.x - expected).abs() <= 1e-4 * expected, "{bounces}: {v} vs {expected}");
+            assert!(se.x <= 1e-4 * expected, "no noise: {se}");
+        }
+    }
+}
+
+/// An open plane (albedo rho, roughness 1) under a sun and a uniform sky L_a: every diffuse path
+/// leaves to the sky, so the full image is, without noise, the sun through the BRDF plus
+/// rho L_a.
+#[test]
+fn the_full_image_of_a_sunlit_plane_under_a_uniform_sky() {
+    let rho = 0.6f32;
+    let mut scene = soup(&quad(0.0, 50.0, true), false);
+    scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
+    scene.materials[0].roughness = 1.0;
+    scene.ambient = Vec3::new(0.2, 0.3, 0.4);
+    let sun = glam::Vec3::new(0.3, -1.0, 0.2).normalize();
+    scene.lights.push(deep_gbuffer::scene::Light {
+        name: "sun".into(),
+        kind: deep_gbuffer::scene::LightKind::Directional { direction: sun },
+        color: Vec3::ONE,
+        intensity: 3.0,
+        casts_shadows: true,
+    });
+    let eye = Vec3::new(0.0, 1.0, 0.0);
+    let camera = Camera::perspective(eye, Vec3::new(0.0, 0.0, -2.0), 60.0, 0.01);
+    let tracer = Tracer::new(&scene).unwrap();
+    let (w, h) = (10u32, 8u32);
+    let image = tracer.full(&scene, &camera, (w, h), None, 3, 4, 1, &|| ()).unwrap();
+    let f = deep_gbuffer::gpu::FrameUniform::new(
+        &camera,
+        deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h),
+        deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h),
+        w,
+        h,
+        0.0,
+        (0, 0, 0),
+    );
+    let mut checked = 0;
+    for (p, v) in image.value.iter().enumerate() {
+        if !image.visible[p] {
+            continue;
+        }
+        // The point on the plane y = 0 through pixel p's centre.
+        let px = glam::Vec2::new((p as u32 % w) as f32 + 0.5, (p as u32 / w) as f32 + 0.5);
+        let near = deep_gbuffer::cpu::frame::view_position(&f, px, 1.0);
+        let dir = glam::Mat4::from_cols_array_2d(&f.inv_view).transform_vector3(near).normalize();
+        let point = eye + dir * (-eye.y / dir.y);
+        let n = Vec3::Y;
+        let brdf = deep_gbuffer::cpu::direct::brdf(n, -dir, -sun, Vec3::splat(rho), 1.0, 0.0);
+        let expected = brdf * 3.0 * n.dot(-sun) + rho * scene.ambient;
+        assert!(
+            (*v - expected).abs().max_element() <= 1e-4,
+            "pixel {p} at {point}: {v} vs {expected}"
+        );
+        assert!(image.stderr[p].max_element() <= 1e-5);
+        checked += 1;
+    }
+    assert!(checked > (w * h / 3) as usize, "the plane is in view ({checked} pixels)");
+}
+
+/// A mirror floor (black, reflectivity 0.7) in front of an emitting wall under a uniform sky:
+/// each mirror ray meets the wall (radiance Le) or leaves to the sky, so the truth is, without
+/// noise, 0.7 Le or 0.7 L_a, decided by where the closed-form mirrored ray crosses the wall's
+/// plane; pixels that do not reflect are not part of the image.
+#[test]
+fn mirror_reflections_show_the_wall_or_the_sky() {
+    let le = Vec3::new(2.0, 1.0, 0.5);
+    let mut triangles = quad(0.0, 50.0, true).to_vec();
+    // A wall at z = -3, 4 wide and 2 high, facing +z.
+    let (a, b, c, d) = (
+        Vec3::new(-2.0, 0.0, -3.0),
+        Vec3::new(2.0, 0.0, -3.0),
+        Vec3::new(2.0, 2.0, -3.0),
+        Vec3::new(-2.0, 2.0, -3.0),
+    );
+    triangles.extend([[a, b, c], [a, c, d]]);
+    let mut scene = soup(&triangles, false);
+    let mut wall = scene.materials[0].clone();
+    wall.base_color = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
+    wall.emissive = le;
+    scene.materials[0].base_color = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
+    scene.materials[0].reflectivity = 0.7;
+    scene.materials.push(wall);
+    for t in 2..4 {
+        scene.triangle_materials[t] = 1;
+    }
+    scene.ambient = Vec3::new(0.1, 0.2, 0.3);
+    let eye = Vec3::new(0.3, 0.8, 1.0);
+    let camera = Camera::perspective(eye, Vec3::new(0.0, 0.0, -3.0), 70.0, 0.01);
+    let tracer = Tracer::new(&scene).unwrap();
+    let (w, h) = (24u32, 18u32);
+    let image = tracer.reflections(&scene, &camera, (w, h), None, 2, 4, 1, &|| ()).unwrap();
+    let full = tracer.full(&scene, &camera, (w, h), None, 2, 4, 1, &|| ()).unwrap();
+    let m = deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h);
+    let f = deep_gbuffer::gpu::FrameUniform::new(&camera, m, m, w, h, 0.0, (0, 0, 0));
+    let (mut wall_pixels, mut sky_pixels, mut others) = (0, 0, 0);
+    for p in 0..(w * h) as usize {
+        let px = glam::Vec2::new((p as u32 % w) as f32 + 0.5, (p as u32 / w) as f32 + 0.5);
+        let dir = glam::Mat4::from_cols_array_2d(&f.inv_view)
+            .transform_vector3(deep_gbuffer::cpu::frame::view_position(&f, px, 1.0))
+            .normalize();
+        let t_floor = -eye.y / dir.y;
+        let t_wall = (-3.0 - eye.z) / dir.z;
+        let at_wall = eye + dir * t_wall;
+        let sees_wall = t_wall > 0.0 && at_wall.x.abs() < 2.0 && (0.0..2.0).contains(&at_wall.y);
+        let on_floor = dir.y < 0.0 && {
+            let q = eye + dir * t_floor;
+            q.x.abs() < 50.0 && q.z.abs() < 50.0
+        };
+        if !(on_floor && (!sees_wall || t_floor < t_wall)) {
+            // The wall or the sky: not a mirror pixel.
+            assert!(!image.visible[p], "pixel {p} does not reflect");
+            others += 1;
+            continue;
+        }
+        let point = eye + dir * t_floor;
+        let r = Vec3::new(dir.x, -dir.y, dir.z);
+        let s = (-3.0 - point.z) / r.z;
+        let q = point + r * s;
+        let margin = 0.02;
+        let inside = s > 0.0 && q.x.abs() < 2.0 - margin && q.y > margin && q.y < 2.0 - margin;
+        let outside = s <= 0.0 || q.x.abs() > 2.0 + margin || q.y > 2.0 + margin;
+        let expected = if inside {
+            wall_pixels += 1;
+            0.7 * le
+        } else if outside {
+            sky_pixels += 1;
+            0.7 * scene.ambient
+        } else {
+            continue; // within the margin of the wall's edge
+        };
+        assert!(image.visible[p], "pixel {p} reflects");
+        assert!(
+            (image.value[p] - expected).abs().max_element() <= 1e-5,
+            "pixel {p}: {} vs {expected}",
+            image.value[p]
+        );
+        // The full image of a black mirror is its reflection.
+        assert!((full.value[p] - expected).abs().max_element() <= 1e-5);
+    }
+    assert!(
+        wall_pixels > 20 && sky_pixels > 20 && others > 20,
+        "{wall_pixels} {sky_pixels} {others}"
+    );
+}
+
+/// The temporal instability metric follows surface points: a pattern that moves with the
+/// motion vectors counts no change, a value that changes everywhere counts its change, and
+/// pixels whose previous position shows another surface are left out.
+#[test]
+fn temporal_change_follows_the_motion_vectors() {
+    let (w, h) = (12u32, 8u32);
+    let layer = |shift: f32, material: u32| deep_gbuffer::GBufferLayer {
+        width: w,
+        height: h,
+        samples: (0..w * h)
+            .map(|_| deep_gbuffer::GSample {
+                depth: 2.0,
+                normal: Vec3::Z,
+                material,
+                motion: glam::Vec2::new(shift, 0.0),
+                ..Default::default()
+            })
+            .collect(),
+    };
+    // A ramp in x that moves right by one pixel a frame.
+    let ramp = |offset: f32| -> Vec<Vec3> {
+        (0..w * h).map(|p| Vec3::splat((p % w) as f32 * 0.1 - offset * 0.1)).collect()
+    };
+    let (before, after) = (layer(0.0, 0), layer(1.0, 0));
+    let (change, pixels) = metrics::temporal_change(&ramp(0.0), &ramp(1.0), &before, &after);
+    assert_eq!(pixels, ((w - 1) * h) as usize, "the first column came from off screen");
+    assert!(change.abs() < 1e-6, "{change}");
+    // Everything brighter by 0.25, no motion.
+    let lifted: Vec<Vec3> = ramp(0.0).iter().map(|v| *v + 0.25).collect();
+    let (change, pixels) = metrics::temporal_change(&ramp(0.0), &lifted, &before, &layer(0.0, 0));
+    assert_eq!(pixels, (w * h) as usize);
+    assert!((change - 0.25).abs() < 1e-6, "{change}");
+    // Another material where the point was: nothing to compare.
+    let (_, pixels) = metrics::temporal_change(&ramp(0.0), &lifted, &layer(0.0, 1), &before);
+    assert_eq!(pixels, 0);
+}
+
+/// SSIM is 1 for identical images, lower for a noisy copy, and lower still for a noisier one.
+#[test]
+fn ssim_ranks_noise() {
+    let (w, h) = (32u32, 24u32);
+    let image: Vec<Vec3> = (0..w * h)
+        .map(|p| Vec3::new((p % w) as f32 / w as f32, (p / w) as f32 / h as f32, 0.5))
+        .collect();
+    let noisy = |amount: f32| -> Vec<Vec3> {
+        image
+            .iter()
+            .enumerate()
+            .map(|(i, v)| *v + Vec3::splat(if (i * 7919) % 5 < 2 { amount } else { -amount }))
+            .collect()
+    };
+    let mask = vec![true; (w * h) as usize];
+    let same = metrics::ssim(&image, &image, &mask, (w, h), 1.0);
+    let a = metrics::ssim(&noisy(0.05), &image, &mask, (w, h), 1.0);
+    let b = metrics::ssim(&noisy(0.2), &image, &mask, (w, h), 1.0);
+    assert!((same - 1.0).abs() < 1e-6, "{same}");
+    assert!(a < same && b < a, "{same} > {a} > {b}");
+}

@@ -5,7 +5,7 @@
 // lie on a golden-angle spiral (a low-discrepancy set of directions for any N) of projected
 // radius r_px = radius * scale / z, rotated per pixel;
 // tap i is at distance r_px * (i + 0.5) / N and reads depth from pyramid level
-// clamp(floor(log2(distance)) - LOG_MAX_OFFSET, 0, levels - 1), reconstructing the point at the
+// clamp(floor(log2(distance)) - mip_offset, 0, levels - 1), reconstructing the point at the
 // pixel that texel came from (so an open plane gives exactly zero). Each tap gives, for each layer's
 // point Y at the tap (v = Y - C):
 //     O(X, Y) = max(1 - v.v / r^2, 0) * max((v.n - beta) / sqrt(v.v + eps), 0),   eps = 1e-4 r^2
@@ -20,8 +20,6 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/spiral.wgsl"
 
-const LOG_MAX_OFFSET: i32 = 3;
-
 // Mirrors `AoUniform` in src/passes/ao.rs.
 struct Ao {
     radius: f32,
@@ -30,9 +28,10 @@ struct Ao {
     samples: u32,
     // Pyramid levels and their offsets in the packed pyramid buffers (up to 8).
     levels: u32,
+    // A tap at distance h pixels reads level floor(log2 h) - mip_offset.
+    mip_offset: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
     offsets: array<vec4<u32>, 2>,
 }
 
@@ -99,7 +98,7 @@ fn visibility(pixel: vec2<u32>) -> f32 {
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }
-        let level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - LOG_MAX_OFFSET, 0, i32(ao.levels) - 1));
+        let level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(ao.levels) - 1));
         let t = vec2<u32>(tap) >> vec2<u32>(level);
         let q = level_offset(level) + t.y * level_size(level).x + t.x;
         let at = vec2<f32>(texel_origin(level, t)) + 0.5;

@@ -10,8 +10,6 @@ use crate::gpu::FrameUniform;
 use crate::passes::pyramid::PyramidLayout;
 use crate::settings::AoSettings;
 
-const LOG_MAX_OFFSET: i32 = 3;
-
 /// As `texel_origin` in the WGSL: the level-0 pixel a pyramid texel was taken from.
 fn texel_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {
     let mut p = t;
@@ -59,7 +57,7 @@ pub fn ao(
                 if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
                     continue;
                 }
-                let level = ((h.max(1.0).log2().floor() as i32) - LOG_MAX_OFFSET)
+                let level = ((h.max(1.0).log2().floor() as i32) - s.mip_offset as i32)
                     .clamp(0, layout.levels.len() as i32 - 1) as usize;
                 let l = layout.levels[level];
                 let q =

@@ -20,8 +20,10 @@ pub struct AoUniform {
     pub samples: u32,
     /// Pyramid levels.
     pub levels: u32,
+    /// [`AoSettings::mip_offset`].
+    pub mip_offset: u32,
     /// Padding.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
     /// Level offsets in the packed pyramid (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
@@ -41,7 +43,8 @@ impl AoUniform {
             intensity: settings.intensity,
             samples: settings.samples,
             levels: layout.levels.len().min(8) as u32,
-            _pad: [0; 3],
+            mip_offset: settings.mip_offset,
+            _pad: [0; 2],
             offsets,
         }
     }

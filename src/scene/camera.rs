@@ -47,6 +47,13 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// This camera turned `degrees` about its target, around its up axis (the eye moves, the
+    /// target stays).
+    pub fn orbited(&self, degrees: f32) -> Camera {
+        let turn = glam::Quat::from_axis_angle(self.up.normalize(), degrees.to_radians());
+        Camera { eye: self.target + turn * (self.eye - self.target), ..self.clone() }
+    }
+
     /// A perspective camera with an infinite far plane.
     pub fn perspective(eye: Vec3, target: Vec3, fov_y_deg: f32, near: f32) -> Camera {
         Camera {

@@ -61,3 +61,91 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
 pub fn weighted_irradiance(values: &[f32], n: usize) -> Vec<Vec3> {
     values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2]) * c[3]).collect()
 }
+
+/// Structural similarity (SSIM) of two images as a viewer sees them: both tone-mapped with
+/// `exposure` ([`crate::output::tonemap`]), their luminance (Rec. 709 weights) quantised to
+/// 8 bits, then the mean SSIM over 8x8 windows of the `image-compare` crate (1: identical).
+/// Pixels where `mask` is false are black in both.
+pub fn ssim(
+    estimate: &[Vec3],
+    truth: &[Vec3],
+    mask: &[bool],
+    (width, height): (u32, u32),
+    exposure: f32,
+) -> f32 {
+    let grey = |image: &[Vec3]| {
+        let mapped = crate::output::tonemap(image, exposure);
+        let bytes: Vec<u8> = mapped
+            .iter()
+            .zip(mask)
+            .map(|(c, m)| {
+                let y = if *m { c.dot(Vec3::new(0.2126, 0.7152, 0.0722)) } else { 0.0 };
+                (y.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+            })
+            .collect();
+        image::GrayImage::from_raw(width, height, bytes).expect("one byte per pixel")
+    };
+    let (a, b) = (grey(estimate), grey(truth));
+    image_compare::gray_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &a, &b)
+        .map_or(0.0, |s| s.score as f32)
+}
+
+/// Temporal instability of a quantity that belongs to the surface, not the view (obscurance,
+/// irradiance): the mean absolute frame-to-frame change at the same surface point. Each pixel of
+/// `current` is compared with `previous` at the position its point had in the previous frame
+/// (its layer-0 motion vector, bilinear between the four pixels around it), where all four show
+/// the same material with normals within 25 degrees of the pixel's; other pixels (newly
+/// visible, at silhouettes) are left out. Returns the mean change (over channels) and the pixels
+/// compared.
+pub fn temporal_change(
+    previous: &[Vec3],
+    current: &[Vec3],
+    previous_layer0: &crate::GBufferLayer,
+    layer0: &crate::GBufferLayer,
+) -> (f32, usize) {
+    let (w, h) = (layer0.width as i64, layer0.height as i64);
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (p, s) in layer0.samples.iter().enumerate() {
+        if s.depth.is_nan() || s.depth <= 0.0 {
+            continue;
+        }
+        let (x, y) = ((p as i64 % w) as f32 + 0.5, (p as i64 / w) as f32 + 0.5);
+        // The previous pixel-centre coordinates, then the four centres around them.
+        let (px, py) = (x - s.motion.x - 0.5, y - s.motion.y - 0.5);
+        let (x0, y0) = (px.floor() as i64, py.floor() as i64);
+        let (fx, fy) = (px - x0 as f32, py - y0 as f32);
+        let mut value = Vec3::ZERO;
+        let mut same = true;
+        for (dx, dy, weight) in [
+            (0, 0, (1.0 - fx) * (1.0 - fy)),
+            (1, 0, fx * (1.0 - fy)),
+            (0, 1, (1.0 - fx) * fy),
+            (1, 1, fx * fy),
+        ] {
+            if weight == 0.0 {
+                continue;
+            }
+            let (qx, qy) = (x0 + dx, y0 + dy);
+            if qx < 0 || qy < 0 || qx >= w || qy >= h {
+                same = false;
+                break;
+            }
+            let q = (qy * w + qx) as usize;
+            let t = &previous_layer0.samples[q];
+            if t.depth.is_nan()
+                || t.depth <= 0.0
+                || t.material != s.material
+                || t.normal.dot(s.normal) < 0.9
+            {
+                same = false;
+                break;
+            }
+            value += previous[q] * weight;
+        }
+        if same {
+            sum += f64::from((current[p] - value).abs().element_sum()) / 3.0;
+            n += 1;
+        }
+    }
+    if n == 0 { (0.0, 0) } else { ((sum / n as f64) as f32, n) }
+}

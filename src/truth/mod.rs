@@ -21,6 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::environment::Environment;
 use crate::gbuffer::{GSample, vis_pack};
 use crate::gpu::FrameUniform;
 use crate::gpu::frame::CameraMatrices;
@@ -176,8 +177,7 @@ impl Tracer {
         check_size(width, height, spp)?;
         ao.validate()?;
         camera.validate()?;
-        let m = CameraMatrices::new(camera, width, height);
-        let f = FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0));
+        let f = first_frame(camera, width, height);
         let r2 = ao.radius * ao.radius;
         let eps = 1e-5 * self.scale;
         self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
@@ -195,17 +195,63 @@ impl Tracer {
             }
             let (mean, se) = mean_and_stderr(sum, sum2, spp);
             let av = (Vec3::ONE - ao.intensity * mean).clamp(Vec3::ZERO, Vec3::ONE);
-            (av, ao.intensity * se)
+            Some((av, ao.intensity * se))
         })
     }
 }
 
-/// What a ray sees where it hits a triangle: the shading normal (facing the ray's origin) and
-/// the material's diffuse albedo (times 1 - metallic) and emission.
+/// What a ray sees where it hits a triangle: the shading normal (facing the ray's origin), the
+/// material's diffuse albedo (times 1 - metallic), emission, and what the BRDF and the mirror
+/// term need.
 struct Surface {
     normal: Vec3,
     diffuse: Vec3,
     emission: Vec3,
+    base_color: Vec3,
+    roughness: f32,
+    metallic: f32,
+    reflectivity: f32,
+}
+
+impl Surface {
+    /// The surface a G-buffer sample describes.
+    fn of(s: &GSample) -> Surface {
+        Surface {
+            normal: s.normal,
+            diffuse: s.base_color * (1.0 - s.metallic),
+            emission: s.emissive,
+            base_color: s.base_color,
+            roughness: s.roughness,
+            metallic: s.metallic,
+            reflectivity: s.reflectivity,
+        }
+    }
+}
+
+/// What light reaches the scene: its lights, and the sky that rays leaving it see.
+struct Lighting<'a> {
+    lights: Vec<GpuLight>,
+    ambient: Vec3,
+    environment: Option<&'a Environment>,
+}
+
+impl Lighting<'_> {
+    fn sky(&self, d: Vec3) -> Vec3 {
+        self.environment.map_or(self.ambient, |e| e.sample(d))
+    }
+}
+
+/// The mirror direction of `d` about the unit normal `n`.
+fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// The unit direction from world point `point` towards the camera of `f`.
+fn towards_eye(f: &FrameUniform, point: Vec3) -> Vec3 {
+    if f.ortho != 0 {
+        return mat_mul(&f.inv_view, [0.0, 0.0, 1.0, 0.0]).xyz().normalize();
+    }
+    (mat_mul(&f.inv_view, [0.0, 0.0, 0.0, 1.0]).xyz() - point).normalize()
 }
 
 impl Tracer {
@@ -235,7 +281,15 @@ impl Tracer {
         }
         let m = scene.triangle_materials[id as usize];
         let Some(material) = scene.materials.get(m as usize) else {
-            return Surface { normal, diffuse: Vec3::ZERO, emission: Vec3::ZERO };
+            return Surface {
+                normal,
+                diffuse: Vec3::ZERO,
+                emission: Vec3::ZERO,
+                base_color: Vec3::ZERO,
+                roughness: 1.0,
+                metallic: 0.0,
+                reflectivity: 0.0,
+            };
         };
         let mut albedo = material.base_color.xyz();
         if let Some(t) = material.base_color_texture.and_then(|t| scene.textures.get(t as usize)) {
@@ -243,11 +297,95 @@ impl Tracer {
             albedo *= crate::cpu::resolve::sample_texture(t, uv);
         }
         let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+        let metallic = material.metallic.clamp(0.0, 1.0);
         Surface {
             normal,
-            diffuse: albedo * (1.0 - material.metallic.clamp(0.0, 1.0)),
+            diffuse: albedo * (1.0 - metallic),
             emission: material.emissive.max(Vec3::ZERO),
+            base_color: albedo,
+            roughness: material.roughness.clamp(0.0, 1.0),
+            metallic,
+            reflectivity: material.reflectivity.clamp(0.0, 1.0),
         }
+    }
+
+    /// Radiance the lights send from `s` at `point` towards `v` through the full BRDF (Lambert
+    /// and GGX, as the direct pass), with shadow rays instead of shadow maps.
+    fn direct_radiance(&self, lights: &[GpuLight], s: &Surface, point: Vec3, v: Vec3) -> Vec3 {
+        let origin = point + s.normal * (1e-5 * self.scale);
+        let mut sum = Vec3::ZERO;
+        for light in lights {
+            let (e, l) = crate::cpu::direct::light_at(light, point);
+            let nl = s.normal.dot(l);
+            if nl <= 0.0 || e.max_element() <= 0.0 || !self.unoccluded(light, origin, l) {
+                continue;
+            }
+            let brdf =
+                crate::cpu::direct::brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic);
+            sum += brdf * e * nl;
+        }
+        sum
+    }
+
+    /// Whether nothing lies between `origin` and `light` along the unit direction `l`.
+    fn unoccluded(&self, light: &GpuLight, origin: Vec3, l: Vec3) -> bool {
+        let reach = if light.kind == 0 {
+            f32::INFINITY
+        } else {
+            (Vec3::from(light.position) - origin).length()
+        };
+        self.closest(origin, l, (0.0, reach), false).is_none()
+    }
+
+    /// Radiance arriving at `origin` from the unit direction `w`: the sky's where nothing is
+    /// hit, else what the first surface sends back ([`Tracer::outgoing`]).
+    fn radiance(
+        &self,
+        scene: &Scene,
+        light: &Lighting,
+        origin: Vec3,
+        w: Vec3,
+        depth: u32,
+        rng: &mut ChaCha8Rng,
+    ) -> Vec3 {
+        let Some((id, t)) = self.closest(origin, w, (0.0, f32::INFINITY), false) else {
+            return light.sky(w);
+        };
+        let hit = origin + w * t;
+        let surface = self.surface(scene, id, hit, w);
+        self.outgoing(scene, light, &surface, hit, -w, depth, rng)
+    }
+
+    /// Radiance leaving surface `s` at `point` towards `v`, in the renderer's material model:
+    /// emission, the lights through the BRDF, and while `depth` > 0 one cosine-distributed
+    /// diffuse bounce (albedo times the radiance it brings: the cosine and 1/pi cancel with the
+    /// sampling density) plus reflectivity times the radiance along the mirror direction, each
+    /// traced on with `depth - 1`.
+    #[expect(clippy::too_many_arguments, reason = "a path's state, spelled out")]
+    fn outgoing(
+        &self,
+        scene: &Scene,
+        light: &Lighting,
+        s: &Surface,
+        point: Vec3,
+        v: Vec3,
+        depth: u32,
+        rng: &mut ChaCha8Rng,
+    ) -> Vec3 {
+        let mut out = s.emission + self.direct_radiance(&light.lights, s, point, v);
+        if depth == 0 {
+            return out;
+        }
+        let origin = point + s.normal * (1e-5 * self.scale);
+        if s.diffuse.max_element() > 0.0 {
+            let w = cosine_direction(s.normal, Vec2::new(rng.random(), rng.random()));
+            out += s.diffuse * self.radiance(scene, light, origin, w, depth - 1, rng);
+        }
+        if s.reflectivity > 0.0 {
+            let r = reflect(-v, s.normal);
+            out += s.reflectivity * self.radiance(scene, light, origin, r, depth - 1, rng);
+        }
+        out
     }
 
     /// Irradiance the lights deliver at `point` (normal `n`), with shadow rays.
@@ -257,15 +395,7 @@ impl Tracer {
         for light in lights {
             let (e, l) = crate::cpu::direct::light_at(light, point);
             let nl = n.dot(l);
-            if nl <= 0.0 || e.max_element() <= 0.0 {
-                continue;
-            }
-            let reach = if light.kind == 0 {
-                f32::INFINITY
-            } else {
-                (Vec3::from(light.position) - origin).length()
-            };
-            if self.closest(origin, l, (0.0, reach), false).is_none() {
+            if nl > 0.0 && e.max_element() > 0.0 && self.unoccluded(light, origin, l) {
                 sum += e * nl;
             }
         }
@@ -302,8 +432,7 @@ impl Tracer {
             return Err(Error::setting("bounces", "0 (at least one surface along a path)"));
         }
         camera.validate()?;
-        let m = CameraMatrices::new(camera, width, height);
-        let f = FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0));
+        let f = first_frame(camera, width, height);
         let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
         let eps = 1e-5 * self.scale;
         self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
@@ -333,19 +462,108 @@ impl Tracer {
                 sum += estimate;
                 sum2 += estimate * estimate;
             }
-            mean_and_stderr(sum, sum2, spp)
+            Some(mean_and_stderr(sum, sum2, spp))
         })
     }
 
+    /// Mirror reflections, the quantity the reflection pass estimates: at every pixel whose
+    /// surface reflects, its reflectivity times the radiance arriving along the mirror direction
+    /// of the view ray,
+    ///
+    /// ```text
+    /// R(X) = reflectivity * L(X, reflect(-v, n)),
+    /// ```
+    ///
+    /// where L is the sky's radiance (`environment`, else the scene's ambient) if the ray leaves
+    /// the scene, else the radiance the surface it hits sends back ([`Tracer::full`]'s, with
+    /// `bounces` more surfaces along each path). Pixels that do not reflect are not part of the
+    /// image (not visible).
+    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
+    pub fn reflections(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        environment: Option<&Environment>,
+        bounces: u32,
+        spp: u32,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<TruthImage> {
+        check_size(width, height, spp)?;
+        camera.validate()?;
+        let f = first_frame(camera, width, height);
+        let lighting = self.lighting(scene, environment);
+        let eps = 1e-5 * self.scale;
+        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+            if s.reflectivity <= 0.0 {
+                return None;
+            }
+            let r = reflect(-towards_eye(&f, point), s.normal);
+            let origin = point + s.normal * eps;
+            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
+            for _ in 0..spp {
+                let l = s.reflectivity * self.radiance(scene, &lighting, origin, r, bounces, rng);
+                sum += l;
+                sum2 += l * l;
+            }
+            Some(mean_and_stderr(sum, sum2, spp))
+        })
+    }
+
+    /// The full image, the quantity the composite estimates: the radiance each layer-0 surface
+    /// sends to the camera, with the same lights, materials and sky (`environment`, else the
+    /// scene's ambient) by path tracing: emission, the lights through the BRDF with shadow rays,
+    /// diffuse interreflection and mirror reflection, up to `bounces` surfaces after the first
+    /// along a path (diffuse paths cosine distributed, one per sample; a mirror adds its branch).
+    /// Pixels without a surface are not part of the image.
+    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
+    pub fn full(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        environment: Option<&Environment>,
+        bounces: u32,
+        spp: u32,
+        seed: u64,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<TruthImage> {
+        check_size(width, height, spp)?;
+        camera.validate()?;
+        let f = first_frame(camera, width, height);
+        let lighting = self.lighting(scene, environment);
+        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+            let surface = Surface::of(s);
+            let v = towards_eye(&f, point);
+            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
+            for _ in 0..spp {
+                let l = self.outgoing(scene, &lighting, &surface, point, v, bounces, rng);
+                sum += l;
+                sum2 += l * l;
+            }
+            Some(mean_and_stderr(sum, sum2, spp))
+        })
+    }
+
+    fn lighting<'a>(&self, scene: &Scene, environment: Option<&'a Environment>) -> Lighting<'a> {
+        Lighting {
+            lights: scene.lights.iter().map(GpuLight::new).collect(),
+            ambient: scene.ambient,
+            environment,
+        }
+    }
+
     /// Runs `estimate(layer-0 sample, its world point, its sample stream)` for every pixel in
-    /// parallel and gathers mean and standard error.
+    /// parallel and gathers mean and standard error (`None`: the effect has no value there, and
+    /// the pixel counts as not visible).
     fn per_pixel(
         &self,
         f: &FrameUniform,
         scene: &Scene,
         seed: u64,
         progress: &(dyn Fn() + Sync),
-        estimate: impl Fn(&GSample, Vec3, &mut ChaCha8Rng) -> (Vec3, Vec3) + Sync,
+        estimate: impl Fn(&GSample, Vec3, &mut ChaCha8Rng) -> Option<(Vec3, Vec3)> + Sync,
     ) -> Result<TruthImage> {
         let (width, height) = (f.width, f.height);
         let rows: Vec<Vec<(Vec3, Vec3, bool)>> = (0..height)
@@ -361,8 +579,10 @@ impl Tracer {
                         let view = view_position(f, px, s.depth);
                         let point = mat_mul(&f.inv_view, view.extend(1.0).to_array()).xyz();
                         let mut rng = pixel_rng(seed, x, y, width);
-                        let (mean, se) = estimate(&s, point, &mut rng);
-                        (mean, se, true)
+                        match estimate(&s, point, &mut rng) {
+                            Some((mean, se)) => (mean, se, true),
+                            None => (Vec3::ZERO, Vec3::ZERO, false),
+                        }
                     })
                     .collect();
                 progress();
@@ -378,6 +598,12 @@ impl Tracer {
             visible: flat.iter().map(|v| v.2).collect(),
         })
     }
+}
+
+/// The frame uniform of `camera` at `width` x `height`, without history.
+fn first_frame(camera: &Camera, width: u32, height: u32) -> FrameUniform {
+    let m = CameraMatrices::new(camera, width, height);
+    FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0))
 }
 
 /// Mean and standard error of `n` samples from their sum and sum of squares.
