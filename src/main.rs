@@ -125,7 +125,8 @@ struct TruthArgs {
     /// Write the truth as linear EXR; its per-pixel standard error goes to FILE-stderr.exr.
     #[arg(long)]
     exr: Option<PathBuf>,
-    /// Write the truth as PNG (values in [0, 1] shown as they are).
+    /// Write the truth as PNG (ao, indirect: values in [0, 1] as they are; reflections, full:
+    /// tone mapped as `render --out`).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Surfaces along a path for --effect indirect (1: one bounce); for reflections and full,
@@ -334,7 +335,15 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         output::write_exr(&stderr_path, w, h, &image.stderr)?;
     }
     if let Some(path) = &args.out {
-        output::write_png_display(path, w, h, &image.value)?;
+        match args.effect {
+            TruthEffect::Ao | TruthEffect::Indirect => {
+                output::write_png_display(path, w, h, &image.value)?
+            }
+            // Radiance: tone mapped as `render --out` maps its image.
+            TruthEffect::Reflections | TruthEffect::Full => {
+                output::write_png_linear(path, w, h, &output::tonemap(&image.value, 1.0))?
+            }
+        }
     }
     if args.compare {
         let gpu = open_gpu(adapter)?;
