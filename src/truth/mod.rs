@@ -182,18 +182,14 @@ impl Tracer {
         let eps = 1e-5 * self.scale;
         self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
             let origin = point + s.normal * eps;
-            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
-            for _ in 0..spp {
+            let (mean, se) = sample_mean(spp, || {
                 let u = Vec2::new(rng.random(), rng.random());
                 let w = cosine_direction(s.normal, u);
-                let o = match self.closest(origin, w, (0.0, ao.radius), false) {
+                Vec3::splat(match self.closest(origin, w, (0.0, ao.radius), false) {
                     Some((_, d)) => (1.0 - d * d / r2).max(0.0),
                     None => 0.0,
-                };
-                sum += Vec3::splat(o);
-                sum2 += Vec3::splat(o * o);
-            }
-            let (mean, se) = mean_and_stderr(sum, sum2, spp);
+                })
+            });
             let av = (Vec3::ONE - ao.intensity * mean).clamp(Vec3::ZERO, Vec3::ONE);
             Some((av, ao.intensity * se))
         })
@@ -436,9 +432,7 @@ impl Tracer {
         let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
         let eps = 1e-5 * self.scale;
         self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
-            let mut sum = Vec3::ZERO;
-            let mut sum2 = Vec3::ZERO;
-            for _ in 0..spp {
+            Some(sample_mean(spp, || {
                 let mut radiance = Vec3::ZERO;
                 let mut throughput = Vec3::ONE;
                 let (mut origin, mut normal) = (point + s.normal * eps, s.normal);
@@ -458,11 +452,8 @@ impl Tracer {
                     }
                     (origin, normal) = (hit + surface.normal * eps, surface.normal);
                 }
-                let estimate = radiance * PI;
-                sum += estimate;
-                sum2 += estimate * estimate;
-            }
-            Some(mean_and_stderr(sum, sum2, spp))
+                radiance * PI
+            }))
         })
     }
 
@@ -501,13 +492,9 @@ impl Tracer {
             }
             let r = reflect(-towards_eye(&f, point), s.normal);
             let origin = point + s.normal * eps;
-            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
-            for _ in 0..spp {
-                let l = s.reflectivity * self.radiance(scene, &lighting, origin, r, bounces, rng);
-                sum += l;
-                sum2 += l * l;
-            }
-            Some(mean_and_stderr(sum, sum2, spp))
+            Some(sample_mean(spp, || {
+                s.reflectivity * self.radiance(scene, &lighting, origin, r, bounces, rng)
+            }))
         })
     }
 
@@ -536,13 +523,9 @@ impl Tracer {
         self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
             let surface = Surface::of(s);
             let v = towards_eye(&f, point);
-            let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
-            for _ in 0..spp {
-                let l = self.outgoing(scene, &lighting, &surface, point, v, bounces, rng);
-                sum += l;
-                sum2 += l * l;
-            }
-            Some(mean_and_stderr(sum, sum2, spp))
+            Some(sample_mean(spp, || {
+                self.outgoing(scene, &lighting, &surface, point, v, bounces, rng)
+            }))
         })
     }
 
@@ -606,8 +589,14 @@ fn first_frame(camera: &Camera, width: u32, height: u32) -> FrameUniform {
     FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0))
 }
 
-/// Mean and standard error of `n` samples from their sum and sum of squares.
-fn mean_and_stderr(sum: Vec3, sum2: Vec3, n: u32) -> (Vec3, Vec3) {
+/// Mean and standard error of `n` samples drawn from `sample`.
+fn sample_mean(n: u32, mut sample: impl FnMut() -> Vec3) -> (Vec3, Vec3) {
+    let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
+    for _ in 0..n {
+        let x = sample();
+        sum += x;
+        sum2 += x * x;
+    }
     let n = n as f32;
     let mean = sum / n;
     if n < 2.0 {
