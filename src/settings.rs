@@ -49,9 +49,10 @@ pub enum Preset {
     /// 4 obscurance taps, 9 radiosity taps, both layers: the two-layer point of the obscurance
     /// front (lowest error there) at little more cost.
     Balanced,
-    /// 11 obscurance taps, 19 radiosity taps, both layers.
+    /// 11 obscurance taps, 19 radiosity taps, both layers: half the radiosity flicker of `low`.
     High,
-    /// 32 obscurance taps, 27 radiosity taps, both layers.
+    /// 32 obscurance taps, 27 radiosity taps, both layers: the least flicker and the lowest
+    /// radiosity error measured.
     Ultra,
 }
 

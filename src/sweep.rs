@@ -436,7 +436,7 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
 pub const REFLECTION_PASSES: [&str; 1] = ["reflections"];
 
 /// Writes `rows` as CSV: the knobs, every pass's ms (one column per pass name), the total, and
-/// per effect its RMSE, MAE, the truth's noise floor and the temporal instability (reflection
+/// per effect its RMSE, MAE, the truth's noise floor and mean and the temporal instability (reflection
 /// columns only when the scene reflects); for the final image also its SSIM.
 pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut names: Vec<&str> = Vec::new();
@@ -464,7 +464,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         &["ao", "indirect", "image"]
     };
     for e in effects {
-        out += &format!(",{e}_rmse,{e}_mae,{e}_truth_stderr,{e}_instability");
+        out += &format!(",{e}_rmse,{e}_mae,{e}_truth_stderr,{e}_truth_mean,{e}_instability");
     }
     out += ",image_ssim\n";
     for r in rows {
@@ -501,7 +501,10 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         }
         stats.push((r.full, i.image));
         for (e, flicker) in stats {
-            out += &format!(",{:.5},{:.5},{:.5},{:.5}", e.rmse, e.mae, e.truth_stderr, flicker);
+            out += &format!(
+                ",{:.5},{:.5},{:.5},{:.5},{:.5}",
+                e.rmse, e.mae, e.truth_stderr, e.truth_mean, flicker
+            );
         }
         out += &format!(",{:.4}\n", r.ssim);
     }
@@ -575,9 +578,9 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
 /// The font of the plots (DejaVu Sans, assets/fonts/, under its own free licence).
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
-/// Draws `pareto.png`: for each effect, every configuration's relative error (RMSE over the
+/// Draws `pareto.png`: one panel per effect, every configuration's relative error (RMSE over the
 /// truth's mean) against the GPU milliseconds of that effect's passes (the final image: of the
-/// whole frame), and its Pareto front as a line.
+/// whole frame), and its Pareto front ringed and joined.
 pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
     use plotters::prelude::*;
     let fail =
@@ -614,51 +617,55 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
         RGBColor(90, 90, 90),
         points(rows, |r| r.total_ms, |r| relative(&r.full)),
     ));
-    let all = series.iter().flat_map(|s| s.2.iter());
-    let (x_max, y_min, y_max) = all
-        .fold((0.0f64, f64::MAX, 0.0f64), |(x, lo, hi), p| (x.max(p.0), lo.min(p.1), hi.max(p.1)));
-    // A log axis: the effects' relative errors differ by orders of magnitude.
-    let y_min = (y_min * 0.8).max(1e-6);
-    let y_max = (y_max * 1.25).max(y_min * 10.0);
+    // One panel per effect, each with its own axes: the effects' times and errors differ by
+    // orders of magnitude.
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
-        .margin(16)
-        .x_label_area_size(48)
-        .y_label_area_size(64)
-        .build_cartesian_2d(0.0..x_max * 1.08 + 1e-3, (y_min..y_max).log_scale())
-        .map_err(|e| fail(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("GPU time of the effect's passes (ms)")
-        .y_desc("RMSE / mean of the truth (log)")
-        .label_style(("sans-serif", 15))
-        .draw()
-        .map_err(|e| fail(&e))?;
-    for (name, colour, points) in &series {
+    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
+    let panels = root.split_evenly((2, 2));
+    for ((name, colour, points), panel) in series.iter().zip(&panels) {
         let colour = *colour;
+        let range = |values: &mut dyn Iterator<Item = f64>| {
+            let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            let pad = ((hi - lo) * 0.1).max(hi.abs() * 0.01).max(1e-6);
+            (lo - pad)..(hi + pad)
+        };
+        let x = range(&mut points.iter().map(|p| p.0));
+        let y = range(&mut points.iter().map(|p| p.1));
+        let mut chart = ChartBuilder::on(panel)
+            .caption(*name, ("sans-serif", 17))
+            .margin(10)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(x.start.max(0.0)..x.end, y)
+            .map_err(|e| fail(&e))?;
         chart
-            .draw_series(points.iter().map(|p| Circle::new(*p, 4, colour.mix(0.5).filled())))
+            .configure_mesh()
+            .x_desc("GPU ms")
+            .y_desc("RMSE / truth mean")
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        chart
+            .draw_series(points.iter().map(|p| Circle::new(*p, 3, colour.mix(0.5).filled())))
             .map_err(|e| fail(&e))?;
         let front: Vec<(f64, f64)> = pareto_front(points).into_iter().map(|i| points[i]).collect();
         chart
-            .draw_series(front.iter().map(|p| Circle::new(*p, 6, colour.stroke_width(2))))
+            .draw_series(front.iter().map(|p| Circle::new(*p, 5, colour.stroke_width(2))))
             .map_err(|e| fail(&e))?;
-        chart
-            .draw_series(LineSeries::new(front, colour.stroke_width(2)))
-            .map_err(|e| fail(&e))?
-            .label(format!("{name} (ringed and joined: Pareto front)"))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
+        chart.draw_series(LineSeries::new(front, colour.stroke_width(2))).map_err(|e| fail(&e))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()
+    panels
+        .last()
+        .filter(|_| series.len() < panels.len())
+        .map(|p| {
+            p.draw_text(
+                "ringed and joined: the Pareto front",
+                &("sans-serif", 15).into_text_style(p),
+                (40, 40),
+            )
+        })
+        .transpose()
         .map_err(|e| fail(&e))?;
     root.present().map_err(|e| fail(&e))
 }
