@@ -369,3 +369,47 @@ fn ssim_ranks_noise() {
     assert!((same - 1.0).abs() < 1e-6, "{same}");
     assert!(a < same && b < a, "{same} > {a} > {b}");
 }
+
+/// The GPU's direct light (shadow maps, PCF) against the truth with no bounce (emission plus the
+/// lights through the same BRDF, shadow rays) on the Cornell box: the same at nearly every
+/// pixel; they may differ only along shadow edges, which PCF softens and shadow rays do not.
+#[test]
+fn gpu_direct_light_matches_the_zero_bounce_truth() {
+    let g = gpu();
+    let mut scene = Scene::from_spec("builtin:cornell").unwrap();
+    scene.ensure_lights();
+    let camera = scene.camera_or_default();
+    let (w, h) = (64u32, 48u32);
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let effects = deep_gbuffer::Effects {
+        ao: false,
+        radiosity: false,
+        reflections: false,
+        ..Default::default()
+    };
+    let settings = Settings { effects, ..Settings::with_size(w, h) };
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let direct = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer().unwrap()).unwrap();
+    let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let truth =
+        Tracer::new(&scene).unwrap().full(&scene, &camera, (w, h), None, 0, 1, 1, &|| ()).unwrap();
+    let (mut compared, mut close) = (0, 0);
+    for (p, s) in layer0.samples.iter().enumerate() {
+        if !(s.depth > 0.0 && truth.visible[p]) {
+            continue;
+        }
+        let gpu = direct[p] + s.emissive;
+        let t = truth.value[p];
+        compared += 1;
+        // 2% or an absolute floor for the darkest pixels.
+        if (gpu - t).abs().max_element() <= 0.02 * t.max_element() + 1e-3 {
+            close += 1;
+        }
+    }
+    let surfaces = layer0.samples.iter().filter(|s| s.depth > 0.0).count();
+    // The box fills three quarters of the view; truth and GPU see the same surfaces.
+    assert!(compared > (w * h) as usize / 2 && compared == surfaces, "{compared} of {surfaces}");
+    // Measured: 2289 of 2304 (99.3%).
+    assert!(close * 100 >= compared * 98, "{close} of {compared} pixels within 2%");
+}
