@@ -306,19 +306,12 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let (spp, seed, bounces) = (args.spp, args.seed, args.bounces);
     let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
     let env = environment.as_ref();
+    let shot = deep_gbuffer::truth::Shot { camera: &camera, size: (w, h), spp, seed };
     let image = match args.effect {
-        TruthEffect::Ao => {
-            tracer.ambient_obscurance(&scene, &camera, w, h, &ao, spp, seed, &progress)?
-        }
-        TruthEffect::Indirect => {
-            tracer.indirect(&scene, &camera, w, h, bounces, spp, seed, &progress)?
-        }
-        TruthEffect::Reflections => {
-            tracer.reflections(&scene, &camera, (w, h), env, bounces, spp, seed, &progress)?
-        }
-        TruthEffect::Full => {
-            tracer.full(&scene, &camera, (w, h), env, bounces, spp, seed, &progress)?
-        }
+        TruthEffect::Ao => tracer.ambient_obscurance(&scene, &shot, &ao, &progress)?,
+        TruthEffect::Indirect => tracer.indirect(&scene, &shot, bounces, &progress)?,
+        TruthEffect::Reflections => tracer.reflections(&scene, &shot, env, bounces, &progress)?,
+        TruthEffect::Full => tracer.full(&scene, &shot, env, bounces, &progress)?,
     };
     bar.finish_and_clear();
     println!(

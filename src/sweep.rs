@@ -30,7 +30,7 @@ use crate::gbuffer::GBufferLayer;
 use crate::scene::{Camera, Scene};
 use crate::settings::{AoSettings, Layer1Variant, Precision, RadiositySettings, Settings};
 use crate::truth::metrics::{self, ErrorStats};
-use crate::truth::{Tracer, TruthImage};
+use crate::truth::{Shot, Tracer, TruthImage};
 use crate::{Error, Renderer, Result, SceneBuffers};
 
 /// One configuration of the accuracy knobs.
@@ -213,19 +213,19 @@ impl Truth {
         progress: &(dyn Fn() + Sync),
     ) -> Result<Truth> {
         let tracer = Tracer::new(scene)?;
-        let (w, h) = size;
-        let ao = AoSettings::default();
+        let shot = |seed| Shot { camera, size, spp, seed };
         let bounces = TRUTH_BOUNCES;
         let reflections = if crate::SceneInfo::of(scene).reflective {
-            Some(tracer.reflections(scene, camera, size, environment, bounces, spp, 3, progress)?)
+            Some(tracer.reflections(scene, &shot(3), environment, bounces, progress)?)
         } else {
             None
         };
+        let ao = AoSettings::default();
         Ok(Truth {
-            ao: tracer.ambient_obscurance(scene, camera, w, h, &ao, spp, 1, progress)?,
-            indirect: tracer.indirect(scene, camera, w, h, bounces, spp, 2, progress)?,
+            ao: tracer.ambient_obscurance(scene, &shot(1), &ao, progress)?,
+            indirect: tracer.indirect(scene, &shot(2), bounces, progress)?,
             reflections,
-            full: tracer.full(scene, camera, size, environment, bounces, spp, 4, progress)?,
+            full: tracer.full(scene, &shot(4), environment, bounces, progress)?,
         })
     }
 }

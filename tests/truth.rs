@@ -4,7 +4,7 @@
 mod common;
 
 use common::{gpu, soup};
-use deep_gbuffer::truth::{Tracer, metrics};
+use deep_gbuffer::truth::{Shot, Tracer, metrics};
 use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 
@@ -32,7 +32,14 @@ fn obscurance_under_a_ceiling_has_the_closed_form() {
     let tracer = Tracer::new(&scene).unwrap();
     let ao = AoSettings { radius: r, ..Default::default() };
     let (w, hgt, spp) = (16, 12, 512);
-    let image = tracer.ambient_obscurance(&scene, &camera, w, hgt, &ao, spp, 7, &|| ()).unwrap();
+    let image = tracer
+        .ambient_obscurance(
+            &scene,
+            &Shot { camera: &camera, size: (w, hgt), spp, seed: 7 },
+            &ao,
+            &|| (),
+        )
+        .unwrap();
     let mu0 = h / r;
     // AV = 1 - A.
     let expected = mu0 * mu0 - 2.0 * mu0 * mu0 * mu0.ln();
@@ -58,7 +65,14 @@ fn obscurance_under_a_ceiling_has_the_closed_form() {
     let camera =
         Camera::perspective(Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, -2.0), 60.0, 0.01);
     let tracer = Tracer::new(&open).unwrap();
-    let image = tracer.ambient_obscurance(&open, &camera, 8, 6, &ao, 64, 7, &|| ()).unwrap();
+    let image = tracer
+        .ambient_obscurance(
+            &open,
+            &Shot { camera: &camera, size: (8, 6), spp: 64, seed: 7 },
+            &ao,
+            &|| (),
+        )
+        .unwrap();
     assert!(image.visible.iter().filter(|v| **v).count() > 10);
     let seen = image.value.iter().zip(&image.visible).filter(|(_, v)| **v);
     assert!(seen.clone().all(|(v, _)| v.x == 1.0), "an open plane is unobscured");
@@ -70,8 +84,16 @@ fn the_same_seed_gives_the_same_truth_and_another_seed_another() {
     let camera = scene.camera_or_default();
     let tracer = Tracer::new(&scene).unwrap();
     let ao = AoSettings::default();
-    let run =
-        |seed| tracer.ambient_obscurance(&scene, &camera, 24, 18, &ao, 16, seed, &|| ()).unwrap();
+    let run = |seed| {
+        tracer
+            .ambient_obscurance(
+                &scene,
+                &Shot { camera: &camera, size: (24, 18), spp: 16, seed },
+                &ao,
+                &|| (),
+            )
+            .unwrap()
+    };
     let (a, b, c) = (run(3), run(3), run(4));
     assert_eq!(a.value, b.value);
     assert_ne!(a.value, c.value);
@@ -87,7 +109,14 @@ fn gpu_obscurance_error_falls_as_its_samples_rise() {
     let (w, h) = (64, 48);
     let tracer = Tracer::new(&scene).unwrap();
     let base = AoSettings { blur_radius: 0, ..Default::default() };
-    let truth = tracer.ambient_obscurance(&scene, &camera, w, h, &base, 256, 1, &|| ()).unwrap();
+    let truth = tracer
+        .ambient_obscurance(
+            &scene,
+            &Shot { camera: &camera, size: (w, h), spp: 256, seed: 1 },
+            &base,
+            &|| (),
+        )
+        .unwrap();
     let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
     let error = |samples| {
         let ao = AoSettings { samples, ..base.clone() };
@@ -116,7 +145,12 @@ fn invalid_truth_requests_are_refused() {
     let tracer = Tracer::new(&scene).unwrap();
     let ao = AoSettings::default();
     for (w, h, spp, name) in [(0, 4, 4, "size"), (4, 4, 0, "spp")] {
-        match tracer.ambient_obscurance(&scene, &camera, w, h, &ao, spp, 1, &|| ()) {
+        match tracer.ambient_obscurance(
+            &scene,
+            &Shot { camera: &camera, size: (w, h), spp, seed: 1 },
+            &ao,
+            &|| (),
+        ) {
             Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
             other => panic!("{name}: {:?}", other.map(|_| ())),
         }
@@ -135,7 +169,14 @@ fn indirect_light_in_a_closed_white_box_has_the_closed_form() {
         Camera::perspective(Vec3::new(0.3, 0.2, 0.6), Vec3::new(-1.0, -0.8, -1.0), 70.0, 0.01);
     let tracer = Tracer::new(&scene).unwrap();
     for bounces in [1, 3] {
-        let image = tracer.indirect(&scene, &camera, 12, 9, bounces, 16, 1, &|| ()).unwrap();
+        let image = tracer
+            .indirect(
+                &scene,
+                &Shot { camera: &camera, size: (12, 9), spp: 16, seed: 1 },
+                bounces,
+                &|| (),
+            )
+            .unwrap();
         let expected =
             std::f32::consts::PI * le * (0..bounces).map(|i| rho.powi(i as i32)).sum::<f32>();
         assert!(image.visible.iter().all(|v| *v), "the box fills the view");
@@ -147,7 +188,12 @@ fn indirect_light_in_a_closed_white_box_has_the_closed_form() {
             assert!(se.x <= 1e-4 * expected, "no noise: {se}");
         }
     }
-    assert!(tracer.indirect(&scene, &camera, 4, 4, 0, 4, 1, &|| ()).is_err(), "zero bounces");
+    assert!(
+        tracer
+            .indirect(&scene, &Shot { camera: &camera, size: (4, 4), spp: 4, seed: 1 }, 0, &|| ())
+            .is_err(),
+        "zero bounces"
+    );
 }
 
 /// The full image inside the same box: the camera sees L = Le (1 + rho + ... + rho^bounces)
@@ -160,7 +206,15 @@ fn the_full_image_in_a_closed_white_box_has_the_closed_form() {
         Camera::perspective(Vec3::new(0.3, 0.2, 0.6), Vec3::new(-1.0, -0.8, -1.0), 70.0, 0.01);
     let tracer = Tracer::new(&scene).unwrap();
     for bounces in [0, 2, 5] {
-        let image = tracer.full(&scene, &camera, (12, 9), None, bounces, 8, 1, &|| ()).unwrap();
+        let image = tracer
+            .full(
+                &scene,
+                &Shot { camera: &camera, size: (12, 9), spp: 8, seed: 1 },
+                None,
+                bounces,
+                &|| (),
+            )
+            .unwrap();
         let expected = le * (0..=bounces).map(|i| rho.powi(i as i32)).sum::<f32>();
         assert!(image.visible.iter().all(|v| *v), "the box fills the view");
         for (v, se) in image.value.iter().zip(&image.stderr) {
@@ -192,7 +246,9 @@ fn the_full_image_of_a_sunlit_plane_under_a_uniform_sky() {
     let camera = Camera::perspective(eye, Vec3::new(0.0, 0.0, -2.0), 60.0, 0.01);
     let tracer = Tracer::new(&scene).unwrap();
     let (w, h) = (10u32, 8u32);
-    let image = tracer.full(&scene, &camera, (w, h), None, 3, 4, 1, &|| ()).unwrap();
+    let image = tracer
+        .full(&scene, &Shot { camera: &camera, size: (w, h), spp: 4, seed: 1 }, None, 3, &|| ())
+        .unwrap();
     let f = deep_gbuffer::gpu::FrameUniform::new(
         &camera,
         deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h),
@@ -256,8 +312,18 @@ fn mirror_reflections_show_the_wall_or_the_sky() {
     let camera = Camera::perspective(eye, Vec3::new(0.0, 0.0, -3.0), 70.0, 0.01);
     let tracer = Tracer::new(&scene).unwrap();
     let (w, h) = (24u32, 18u32);
-    let image = tracer.reflections(&scene, &camera, (w, h), None, 2, 4, 1, &|| ()).unwrap();
-    let full = tracer.full(&scene, &camera, (w, h), None, 2, 4, 1, &|| ()).unwrap();
+    let image = tracer
+        .reflections(
+            &scene,
+            &Shot { camera: &camera, size: (w, h), spp: 4, seed: 1 },
+            None,
+            2,
+            &|| (),
+        )
+        .unwrap();
+    let full = tracer
+        .full(&scene, &Shot { camera: &camera, size: (w, h), spp: 4, seed: 1 }, None, 2, &|| ())
+        .unwrap();
     let m = deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h);
     let f = deep_gbuffer::gpu::FrameUniform::new(&camera, m, m, w, h, 0.0, (0, 0, 0));
     let (mut wall_pixels, mut sky_pixels, mut others) = (0, 0, 0);
@@ -392,8 +458,10 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     let direct = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer().unwrap()).unwrap();
     let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-    let truth =
-        Tracer::new(&scene).unwrap().full(&scene, &camera, (w, h), None, 0, 1, 1, &|| ()).unwrap();
+    let truth = Tracer::new(&scene)
+        .unwrap()
+        .full(&scene, &Shot { camera: &camera, size: (w, h), spp: 1, seed: 1 }, None, 0, &|| ())
+        .unwrap();
     let (mut compared, mut close) = (0, 0);
     for (p, s) in layer0.samples.iter().enumerate() {
         if !(s.depth > 0.0 && truth.visible[p]) {

@@ -68,6 +68,40 @@ impl TruthImage {
     }
 }
 
+/// What a truth image is traced for: the camera, the image size, the rays per pixel and the
+/// seed of the per-pixel sample streams.
+#[derive(Clone, Debug)]
+pub struct Shot<'a> {
+    /// The camera (its pixel centres are the primary rays).
+    pub camera: &'a Camera,
+    /// Width and height in pixels.
+    pub size: (u32, u32),
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the sample streams (the same seed gives the same image).
+    pub seed: u64,
+}
+
+impl Shot<'_> {
+    /// The frame uniform of the shot (no history), after checking its size, samples and camera.
+    fn frame(&self) -> Result<FrameUniform> {
+        let (width, height) = self.size;
+        if width == 0
+            || height == 0
+            || width > crate::gpu::frame::MAX_IMAGE_SIDE
+            || height > crate::gpu::frame::MAX_IMAGE_SIDE
+        {
+            return Err(Error::setting("size", format!("{width}x{height} (each side 1 to 16384)")));
+        }
+        if self.spp == 0 {
+            return Err(Error::setting("spp", "0 (at least one sample per pixel)"));
+        }
+        self.camera.validate()?;
+        let m = CameraMatrices::new(self.camera, width, height);
+        Ok(FrameUniform::new(self.camera, m, m, width, height, 0.0, (0, 0, 0)))
+    }
+}
+
 /// A point on the unit hemisphere around `n`, cosine distributed, from two uniform numbers.
 fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
@@ -162,25 +196,19 @@ impl Tracer {
     /// contributes its falloff alone. The kernel's bias beta (a guard against self-occlusion on
     /// tessellated curves, a screen-space artefact) has no place here. `progress` is called once
     /// per finished row.
-    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
     pub fn ambient_obscurance(
         &self,
         scene: &Scene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
+        shot: &Shot,
         ao: &AoSettings,
-        spp: u32,
-        seed: u64,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
-        check_size(width, height, spp)?;
+        let f = shot.frame()?;
         ao.validate()?;
-        camera.validate()?;
-        let f = first_frame(camera, width, height);
+        let spp = shot.spp;
         let r2 = ao.radius * ao.radius;
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
             let origin = point + s.normal * eps;
             let (mean, se) = sample_mean(spp, || {
                 let u = Vec2::new(rng.random(), rng.random());
@@ -411,27 +439,21 @@ impl Tracer {
     /// sky is the ambient term's). Cosine-distributed paths, `spp` per pixel, so a path's
     /// estimate is pi times the radiance it carries back. Specular reflection on the way is not
     /// followed (the radiosity pass gathers diffuse light).
-    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
     pub fn indirect(
         &self,
         scene: &Scene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
+        shot: &Shot,
         bounces: u32,
-        spp: u32,
-        seed: u64,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
-        check_size(width, height, spp)?;
+        let f = shot.frame()?;
         if bounces == 0 {
             return Err(Error::setting("bounces", "0 (at least one surface along a path)"));
         }
-        camera.validate()?;
-        let f = first_frame(camera, width, height);
+        let spp = shot.spp;
         let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
             Some(sample_mean(spp, || {
                 let mut radiance = Vec3::ZERO;
                 let mut throughput = Vec3::ONE;
@@ -469,24 +491,19 @@ impl Tracer {
     /// the scene, else the radiance the surface it hits sends back ([`Tracer::full`]'s, with
     /// `bounces` more surfaces along each path). Pixels that do not reflect are not part of the
     /// image (not visible).
-    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
     pub fn reflections(
         &self,
         scene: &Scene,
-        camera: &Camera,
-        (width, height): (u32, u32),
+        shot: &Shot,
         environment: Option<&Environment>,
         bounces: u32,
-        spp: u32,
-        seed: u64,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
-        check_size(width, height, spp)?;
-        camera.validate()?;
-        let f = first_frame(camera, width, height);
+        let f = shot.frame()?;
+        let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
             if s.reflectivity <= 0.0 {
                 return None;
             }
@@ -504,23 +521,18 @@ impl Tracer {
     /// diffuse interreflection and mirror reflection, up to `bounces` surfaces after the first
     /// along a path (diffuse paths cosine distributed, one per sample; a mirror adds its branch).
     /// Pixels without a surface are not part of the image.
-    #[expect(clippy::too_many_arguments, reason = "the render's own inputs, spelled out")]
     pub fn full(
         &self,
         scene: &Scene,
-        camera: &Camera,
-        (width, height): (u32, u32),
+        shot: &Shot,
         environment: Option<&Environment>,
         bounces: u32,
-        spp: u32,
-        seed: u64,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
-        check_size(width, height, spp)?;
-        camera.validate()?;
-        let f = first_frame(camera, width, height);
+        let f = shot.frame()?;
+        let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
-        self.per_pixel(&f, scene, seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
             let surface = Surface::of(s);
             let v = towards_eye(&f, point);
             Some(sample_mean(spp, || {
@@ -583,12 +595,6 @@ impl Tracer {
     }
 }
 
-/// The frame uniform of `camera` at `width` x `height`, without history.
-fn first_frame(camera: &Camera, width: u32, height: u32) -> FrameUniform {
-    let m = CameraMatrices::new(camera, width, height);
-    FrameUniform::new(camera, m, m, width, height, 0.0, (0, 0, 0))
-}
-
 /// Mean and standard error of `n` samples drawn from `sample`.
 fn sample_mean(n: u32, mut sample: impl FnMut() -> Vec3) -> (Vec3, Vec3) {
     let (mut sum, mut sum2) = (Vec3::ZERO, Vec3::ZERO);
@@ -610,18 +616,4 @@ fn sample_mean(n: u32, mut sample: impl FnMut() -> Vec3) -> (Vec3, Vec3) {
 fn pixel_rng(seed: u64, x: u32, y: u32, width: u32) -> ChaCha8Rng {
     let index = u64::from(y) * u64::from(width) + u64::from(x);
     ChaCha8Rng::seed_from_u64(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15))
-}
-
-fn check_size(width: u32, height: u32, spp: u32) -> Result<()> {
-    if width == 0
-        || height == 0
-        || width > crate::gpu::frame::MAX_IMAGE_SIDE
-        || height > crate::gpu::frame::MAX_IMAGE_SIDE
-    {
-        return Err(Error::setting("size", format!("{width}x{height} (each side 1 to 16384)")));
-    }
-    if spp == 0 {
-        return Err(Error::setting("spp", "0 (at least one sample per pixel)"));
-    }
-    Ok(())
 }
