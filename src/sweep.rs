@@ -143,39 +143,42 @@ impl Default for Grid {
 }
 
 impl Grid {
-    /// Every configuration, in a fixed order.
+    /// Every configuration, in a fixed order (the tap counts vary fastest, the scale slowest).
     pub fn configurations(&self) -> Vec<Knobs> {
-        let mut out = Vec::new();
-        for &scale in &self.scale {
-            for &precision in &self.precision {
-                for &layer1 in &self.layer1 {
-                    for &dz in &self.dz {
-                        for &mip_offset in &self.mip_offset {
-                            for &radiosity_radius in &self.radiosity_radius {
-                                for &layers in &self.layers {
-                                    for &ao_samples in &self.ao_samples {
-                                        for &radiosity_samples in &self.radiosity_samples {
-                                            out.push(Knobs {
-                                                ao_samples,
-                                                radiosity_samples,
-                                                layers,
-                                                precision,
-                                                radiosity_radius,
-                                                mip_offset,
-                                                dz,
-                                                layer1,
-                                                scale,
-                                            });
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+        /// Each configuration of `configs` once per value of `values`, set by `set`.
+        fn times<T: Copy>(configs: Vec<Knobs>, values: &[T], set: fn(&mut Knobs, T)) -> Vec<Knobs> {
+            configs
+                .into_iter()
+                .flat_map(|k| {
+                    values.iter().map(move |&v| {
+                        let mut k = k.clone();
+                        set(&mut k, v);
+                        k
+                    })
+                })
+                .collect()
         }
-        out
+        let settings = Settings::default();
+        let base = Knobs {
+            ao_samples: settings.ao.samples,
+            radiosity_samples: settings.radiosity.samples,
+            layers: 2,
+            precision: settings.precision,
+            radiosity_radius: settings.radiosity.radius,
+            mip_offset: settings.ao.mip_offset,
+            dz: settings.dz,
+            layer1: settings.layer1,
+            scale: 1.0,
+        };
+        let k = times(vec![base], &self.scale, |k, v| k.scale = v);
+        let k = times(k, &self.precision, |k, v| k.precision = v);
+        let k = times(k, &self.layer1, |k, v| k.layer1 = v);
+        let k = times(k, &self.dz, |k, v| k.dz = v);
+        let k = times(k, &self.mip_offset, |k, v| k.mip_offset = v);
+        let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
+        let k = times(k, &self.layers, |k, v| k.layers = v);
+        let k = times(k, &self.ao_samples, |k, v| k.ao_samples = v);
+        times(k, &self.radiosity_samples, |k, v| k.radiosity_samples = v)
     }
 }
 
@@ -668,4 +671,33 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
         .transpose()
         .map_err(|e| fail(&e))?;
     root.present().map_err(|e| fail(&e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_is_every_combination_with_the_taps_varying_fastest() {
+        let grid = Grid {
+            ao_samples: vec![4, 8],
+            radiosity_samples: vec![5, 9],
+            layers: vec![1, 2],
+            scale: vec![0.5, 1.0],
+            layer1: vec![Layer1Variant::TwoPass, Layer1Variant::Reproject],
+            ..Grid::default()
+        };
+        let c = grid.configurations();
+        assert_eq!(c.len(), 32);
+        for (i, a) in c.iter().enumerate() {
+            assert!(c[i + 1..].iter().all(|b| b != a), "configuration {i} repeats");
+        }
+        let key =
+            |k: &Knobs| (k.scale, k.layer1 as u8, k.layers, k.ao_samples, k.radiosity_samples);
+        assert_eq!(key(&c[0]), (0.5, 0, 1, 4, 5));
+        assert_eq!(key(&c[1]), (0.5, 0, 1, 4, 9));
+        assert_eq!(key(&c[2]), (0.5, 0, 1, 8, 5));
+        assert_eq!(key(&c[31]), (1.0, 2, 2, 8, 9));
+        assert!(c.iter().all(|k| k.dz == Settings::default().dz && k.precision == Precision::Full));
+    }
 }
