@@ -220,8 +220,8 @@ fn resolution(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
 }
 
 fn main() {
-    let gpu =
-        Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
+    let gpu = Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements())
+        .expect("a GPU adapter (or lavapipe) for the benchmarks");
     let groups = common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution");
     let mut c = Criterion::default().configure_from_args();
     let mut out = format!("Device: {}\n\n", gpu.describe());

@@ -18,7 +18,7 @@ use std::time::Duration;
 
 use criterion::Criterion;
 use deep_gbuffer::gpu::{Gpu, GpuOptions, Timestamps};
-use deep_gbuffer::passes::baseline::BaselinePass;
+use deep_gbuffer::testing::BaselinePass;
 use deep_gbuffer::{Camera, Layer1Variant, Precision, Renderer, SceneBuffers, Settings};
 use wgpu::util::DeviceExt;
 
@@ -171,9 +171,10 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
 }
 
 fn main() {
-    let gpu =
-        Gpu::new(&GpuOptions::default()).expect("a GPU adapter (or lavapipe) for the benchmarks");
-    let hw = Gpu::new(&GpuOptions::default()).expect("a second device for the hardware baseline");
+    let gpu = Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements())
+        .expect("a GPU adapter (or lavapipe) for the benchmarks");
+    let hw = Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements())
+        .expect("a second device for the hardware baseline");
     let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
     let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,engine");
     let mut c = Criterion::default().configure_from_args();

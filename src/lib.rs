@@ -11,7 +11,8 @@
 //! ```no_run
 //! use deep_gbuffer::{gpu::{Gpu, GpuOptions}, Renderer, Scene, SceneBuffers, Settings};
 //! # fn main() -> deep_gbuffer::Result<()> {
-//! let gpu = Gpu::new(&GpuOptions::default())?;
+//! // A host engine opens its own device with `Renderer::requirements()`; this helper does too.
+//! let gpu = Gpu::new(&GpuOptions::default(), &Renderer::requirements())?;
 //! let scene = Scene::from_spec("builtin:cornell")?;
 //! let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
 //! let mut renderer = Renderer::new(&gpu.device, &gpu.queue, Settings::with_size(320, 240))?;
@@ -34,25 +35,31 @@
 pub mod cpu;
 pub mod environment;
 mod error;
+pub mod frame;
 pub mod gbuffer;
 pub mod gpu;
 pub mod output;
-pub mod passes;
+mod passes;
 pub mod plan;
 mod renderer;
 pub mod scene;
 pub mod settings;
+#[cfg(feature = "sweep")]
 pub mod sweep;
+#[doc(hidden)]
+pub mod testing;
+#[cfg(feature = "truth")]
 pub mod truth;
 
 pub use environment::Environment;
 pub use error::{Error, Result};
 pub use gbuffer::{GBufferLayer, GSample};
-pub use plan::{Effects, Plan};
-pub use renderer::{Diagnostics, Renderer};
+pub use passes::radiosity::RadiosityBuffers;
+pub use plan::{Effect, PassId, Plan, Reason};
+pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
 pub use settings::{
-    AoSettings, AtomicPath, Boost, Layer1Variant, Normalization, Precision, Preset,
+    AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision, Preset,
     RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
 };

@@ -7,9 +7,9 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::Projection;
 use deep_gbuffer::{
-    AoSettings, AtomicPath, Boost, Camera, Effects, Environment, Error, Layer1Variant,
-    Normalization, Precision, Preset, RadiositySettings, Renderer, Result, Scene, SceneBuffers,
-    Settings, output,
+    AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error, Layer1Variant,
+    Normalization, PassId, Precision, Preset, RadiositySettings, Renderer, Result, Scene,
+    SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -161,10 +161,11 @@ struct RenderArgs {
     /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
     #[arg(long)]
     camera: Option<String>,
-    /// Write depth, normal and base colour of both layers as PNG and EXR into this folder.
+    /// Write depth, normal and base colour of the layers the frame drew, and each lighting term
+    /// (ao, direct, radiosity), as PNG and EXR into this folder.
     #[arg(long)]
     layers: Option<PathBuf>,
-    /// Write the image as PNG (layer 0 simply shaded).
+    /// Write the HDR composite, tone mapped, as PNG.
     #[arg(long)]
     out: Option<PathBuf>,
     /// Write the image as linear EXR.
@@ -353,48 +354,39 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         for _ in 0..args.frames {
             renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         }
-        let (buffer, passes, what): (_, &[&str], _) = match args.effect {
-            TruthEffect::Ao => {
-                (renderer.ao_buffer(), &deep_gbuffer::sweep::AO_PASSES, "obscurance")
+        let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
+        let (estimate, effect, what) = match args.effect {
+            TruthEffect::Ao => (
+                terms.av.map(|av| av.iter().map(|v| Vec3::splat(*v)).collect()),
+                Some(Effect::Ao),
+                "obscurance",
+            ),
+            TruthEffect::Indirect => (terms.indirect, Some(Effect::Radiosity), "radiosity"),
+            TruthEffect::Reflections => {
+                (terms.reflections, Some(Effect::Reflections), "reflections")
             }
-            TruthEffect::Indirect => (
-                renderer.radiosity_buffers().map(|b| b[4]),
-                &deep_gbuffer::sweep::RADIOSITY_PASSES,
-                "radiosity",
-            ),
-            TruthEffect::Reflections => (
-                renderer.reflections_buffer(),
-                &deep_gbuffer::sweep::REFLECTION_PASSES,
-                "reflections",
-            ),
-            TruthEffect::Full => (renderer.hdr_buffer(), &[][..], "image"),
+            TruthEffect::Full => (Some(terms.hdr), None, "image"),
         };
-        let Some(buffer) = buffer else {
+        let Some(estimate) = estimate else {
             return Err(Error::InvalidSetting {
                 name: "effect",
                 message: format!("the scene's plan runs no {what} to compare"),
             });
-        };
-        let values = renderer.read_f32(&gpu.device, &gpu.queue, buffer)?;
-        let n = (w * h) as usize;
-        let estimate: Vec<Vec3> = match args.effect {
-            TruthEffect::Ao => values.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
-            TruthEffect::Indirect => deep_gbuffer::truth::metrics::weighted_irradiance(&values, n),
-            TruthEffect::Reflections | TruthEffect::Full => {
-                values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
-            }
         };
         let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
         let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
         let stats = deep_gbuffer::truth::metrics::compare(&estimate, &mask, &image);
         let timings = renderer.timings(&gpu.device)?;
         // The image costs the whole frame.
-        let ms: f64 = timings
+        let timed: Vec<_> = timings
             .iter()
-            .filter(|t| passes.is_empty() || passes.contains(&t.name.as_str()))
-            .map(|t| t.ms)
-            .sum();
-        let passes: &[&str] = if passes.is_empty() { &["every pass"] } else { passes };
+            .filter(|t| effect.is_none() || PassId::effect_of(&t.name) == effect)
+            .collect();
+        let ms: f64 = timed.iter().map(|t| t.ms).sum();
+        let passes: Vec<&str> = match effect {
+            Some(_) => timed.iter().map(|t| t.name.as_str()).collect(),
+            None => vec!["every pass"],
+        };
         if args.effect == TruthEffect::Full {
             let seen: Vec<bool> = mask.iter().zip(&image.visible).map(|(a, b)| *a && *b).collect();
             let ssim =
@@ -507,7 +499,7 @@ fn scene_and_camera(spec: &str, camera: Option<&str>) -> Result<(Scene, Camera)>
 }
 
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
-    Gpu::new(&GpuOptions { adapter: cli_adapter.clone() })
+    Gpu::new(&GpuOptions { adapter: cli_adapter.clone() }, &Renderer::requirements())
 }
 
 fn info(adapter: &Option<String>) -> Result<()> {
@@ -612,11 +604,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         camera = start.orbited(args.orbit * i as f32 / args.frames as f32);
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
-            let hdr = renderer.read_rgb(
-                &gpu.device,
-                &gpu.queue,
-                renderer.hdr_buffer().expect("rendered"),
-            )?;
+            let hdr = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.hdr_buffer())?;
             let path = dir.join(format!("frame_{i:04}.png"));
             output::write_png_linear(
                 &path,
@@ -635,54 +623,25 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         eprintln!("warning: {line}");
     }
     let (w, h) = (settings.width, settings.height);
-    let av = match renderer.ao_buffer() {
-        Some(buffer) => Some(renderer.read_f32(&gpu.device, &gpu.queue, buffer)?),
-        None => None,
-    };
+    let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
     if let Some(dir) = &args.layers {
         output::write_layers(dir, &layers)?;
-        if let Some(av) = &av {
-            let grey: Vec<Vec3> =
-                av.iter().take((w * h) as usize).map(|&v| Vec3::splat(v)).collect();
+        if let Some(av) = &terms.av {
+            let grey: Vec<Vec3> = av.iter().map(|&v| Vec3::splat(v)).collect();
             output::write_png_display(&dir.join("ao.png"), w, h, &grey)?;
             output::write_exr(&dir.join("ao.exr"), w, h, &grey)?;
         }
-        // Each lighting term alone: direct radiance, and the radiosity term (the diffuse albedo
-        // times the irradiance, times its confidence), tone mapped like the image.
-        let direct = renderer.read_rgb(
-            &gpu.device,
-            &gpu.queue,
-            renderer.direct_buffer().expect("rendered"),
-        )?;
-        output::write_png_linear(
-            &dir.join("direct.png"),
-            w,
-            h,
-            &output::tonemap(&direct, args.exposure),
-        )?;
-        output::write_exr(&dir.join("direct.exr"), w, h, &direct)?;
-        if let Some([.., irradiance]) = renderer.radiosity_buffers() {
-            let e = renderer.read_f32(&gpu.device, &gpu.queue, irradiance)?;
-            let term: Vec<Vec3> = e
-                .chunks_exact(4)
-                .zip(&layers[0].samples)
-                .map(|(c, s)| {
-                    (1.0 - s.metallic) * s.base_color / std::f32::consts::PI
-                        * Vec3::new(c[0], c[1], c[2])
-                        * c[3].clamp(0.0, 1.0)
-                })
-                .collect();
-            output::write_png_linear(
-                &dir.join("radiosity.png"),
-                w,
-                h,
-                &output::tonemap(&term, args.exposure),
-            )?;
-            output::write_exr(&dir.join("radiosity.exr"), w, h, &term)?;
+        // Each lighting term alone, tone mapped like the image: direct radiance, and the
+        // radiosity term as the composite adds it.
+        let lit = [("direct", Some(&terms.direct)), ("radiosity", terms.radiosity.as_ref())];
+        for (name, term) in lit {
+            let Some(term) = term else { continue };
+            let png = dir.join(format!("{name}.png"));
+            output::write_png_linear(&png, w, h, &output::tonemap(term, args.exposure))?;
+            output::write_exr(&dir.join(format!("{name}.exr")), w, h, term)?;
         }
     }
-    let hdr_buffer = renderer.hdr_buffer().expect("a frame was rendered");
-    let image = renderer.read_rgb(&gpu.device, &gpu.queue, hdr_buffer)?;
+    let image = terms.hdr;
     if let Some(path) = &args.out {
         output::write_png_linear(path, w, h, &output::tonemap(&image, args.exposure))?;
     }

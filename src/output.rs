@@ -8,7 +8,8 @@ use glam::Vec3;
 use crate::gbuffer::GBufferLayer;
 use crate::{Error, Result};
 
-fn srgb(c: f32) -> u8 {
+/// The 8-bit sRGB encoding of a linear value (clamped to [0, 1]; NaN and infinities are 0).
+pub fn srgb8(c: f32) -> u8 {
     let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
     let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5) as u8
@@ -16,7 +17,7 @@ fn srgb(c: f32) -> u8 {
 
 /// Writes an 8-bit RGB PNG from linear colours (sRGB encoded on the way).
 pub fn write_png_linear(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
-    let bytes: Vec<u8> = pixels.iter().flat_map(|c| [srgb(c.x), srgb(c.y), srgb(c.z)]).collect();
+    let bytes: Vec<u8> = pixels.iter().flat_map(|c| [srgb8(c.x), srgb8(c.y), srgb8(c.z)]).collect();
     write_png_raw(path, width, height, bytes)
 }
 

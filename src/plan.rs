@@ -1,199 +1,352 @@
 //! Which passes a frame runs: only those the scene and the settings call for.
 //!
-//! A [`Plan`] is a plain value computed from a scene's [`SceneInfo`] and the [`Settings`]; it
-//! can be printed (`deep-gbuffer render --plan`) and tested. The renderer records exactly the
-//! passes it lists, so a skipped pass issues no GPU work and has no timing.
+//! A [`PassId`] names one pass; its [`name`](PassId::name) is the only spelling of a pass name
+//! (`--timings`, `--plan`, the sweep's columns and the tests all use it). A [`Plan`] is the
+//! ordered list of passes one frame records, computed from a scene's [`SceneInfo`] and the
+//! [`Settings`], with the reason for each effect it leaves out. The renderer walks it: a pass
+//! not in the plan issues no GPU work and has no timing.
 
+use std::borrow::Cow;
 use std::fmt;
 
 use crate::scene::SceneInfo;
 use crate::settings::{Layer1Variant, Settings};
 
-/// The effects a user can switch on or off (`--effects`); the plan runs an enabled effect only
-/// when the scene calls for it.
+/// One pass of a frame.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum PassId {
+    /// Empties the visibility buffers.
+    RasterClear,
+    /// Rasterizes layer 0.
+    RasterLayer0,
+    /// Rasterizes layer 1 against this frame's layer 0 (the two-pass variant, and the first
+    /// frame of the one-pass variants).
+    RasterLayer1,
+    /// Rasterizes both layers in one pass against the previous frame's layer 0.
+    RasterLayers,
+    /// Visibility buffers to G-buffer attributes.
+    Resolve,
+    /// The depth pyramid of each layer obscurance reads.
+    Pyramid,
+    /// Ambient obscurance.
+    Ao,
+    /// The bilateral blur of the obscurance.
+    AoBlur,
+    /// The shadow map of one light.
+    Shadow {
+        /// Index of the light in the scene's lights.
+        light: usize,
+        /// The light's name.
+        name: String,
+    },
+    /// Direct light (with the shadow maps) of each layer the later passes read.
+    Direct,
+    /// Outgoing radiance of both layers and the radiosity gather.
+    Radiosity,
+    /// The temporal filter of the gathered irradiance.
+    RadiosityTemporal,
+    /// The bilateral blur of the filtered irradiance.
+    RadiosityBlur,
+    /// Screen-space reflections.
+    Reflections,
+    /// `DIRECT + AV * AMBIENT + RADIOSITY + REFLECTIONS` into the HDR image.
+    Composite,
+}
+
+/// The part of the renderer that records a pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Effects {
-    /// Ambient obscurance (needs an ambient term).
-    pub ao: bool,
-    /// Direct light (needs a light).
-    pub direct: bool,
-    /// Shadow maps (need direct light and a light that casts shadows).
-    pub shadows: bool,
-    /// Screen-space radiosity (needs a light or an emissive material).
-    pub radiosity: bool,
-    /// Screen-space reflections (need a reflective material).
-    pub reflections: bool,
+pub(crate) enum StageId {
+    Raster,
+    Resolve,
+    Ao,
+    Shadows,
+    Direct,
+    Radiosity,
+    Reflections,
+    Composite,
 }
 
-impl Default for Effects {
-    fn default() -> Self {
-        Effects { ao: true, direct: true, shadows: true, radiosity: true, reflections: true }
+impl PassId {
+    /// Every pass but the per-light shadow passes, in frame order.
+    pub const FIXED: [PassId; 14] = [
+        PassId::RasterClear,
+        PassId::RasterLayer0,
+        PassId::RasterLayer1,
+        PassId::RasterLayers,
+        PassId::Resolve,
+        PassId::Pyramid,
+        PassId::Ao,
+        PassId::AoBlur,
+        PassId::Direct,
+        PassId::Radiosity,
+        PassId::RadiosityTemporal,
+        PassId::RadiosityBlur,
+        PassId::Reflections,
+        PassId::Composite,
+    ];
+
+    /// The pass's name: `raster.layer0`, `ao.blur`, `shadow.<light name>`, ...
+    pub fn name(&self) -> Cow<'static, str> {
+        Cow::Borrowed(match self {
+            PassId::RasterClear => "raster.clear",
+            PassId::RasterLayer0 => "raster.layer0",
+            PassId::RasterLayer1 => "raster.layer1",
+            PassId::RasterLayers => "raster.layers",
+            PassId::Resolve => "resolve",
+            PassId::Pyramid => "pyramid",
+            PassId::Ao => "ao",
+            PassId::AoBlur => "ao.blur",
+            PassId::Shadow { name, .. } => return Cow::Owned(format!("shadow.{name}")),
+            PassId::Direct => "direct",
+            PassId::Radiosity => "radiosity",
+            PassId::RadiosityTemporal => "radiosity.temporal",
+            PassId::RadiosityBlur => "radiosity.blur",
+            PassId::Reflections => "reflections",
+            PassId::Composite => "composite",
+        })
     }
-}
 
-impl Effects {
-    /// Parses `auto` (everything the scene calls for) or a comma-separated list (`ao,direct`).
-    pub fn parse(text: &str) -> crate::Result<Effects> {
-        if text.trim() == "auto" {
-            return Ok(Effects::default());
-        }
-        let mut e = Effects {
-            ao: false,
-            direct: false,
-            shadows: false,
-            radiosity: false,
-            reflections: false,
-        };
-        for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-            match name {
-                "ao" => e.ao = true,
-                "direct" => e.direct = true,
-                "shadows" => e.shadows = true,
-                "radiosity" => e.radiosity = true,
-                "reflections" => e.reflections = true,
-                other => {
-                    return Err(crate::Error::setting(
-                        "effects",
-                        format!(
-                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections; or auto)"
-                        ),
-                    ));
-                }
+    /// The effect whose cost the pass is (`None`: the G-buffer and the composite, which every
+    /// frame pays).
+    pub fn effect(&self) -> Option<Effect> {
+        match self {
+            PassId::Pyramid | PassId::Ao | PassId::AoBlur => Some(Effect::Ao),
+            PassId::Shadow { .. } => Some(Effect::Shadows),
+            PassId::Direct => Some(Effect::Direct),
+            PassId::Radiosity | PassId::RadiosityTemporal | PassId::RadiosityBlur => {
+                Some(Effect::Radiosity)
             }
+            PassId::Reflections => Some(Effect::Reflections),
+            _ => None,
         }
-        Ok(e)
+    }
+
+    /// The effect of the pass named `name` (as [`PassId::name`] spells it), if any.
+    pub fn effect_of(name: &str) -> Option<Effect> {
+        if name.starts_with("shadow.") {
+            return Some(Effect::Shadows);
+        }
+        PassId::FIXED.iter().find(|p| p.name() == name).and_then(PassId::effect)
+    }
+
+    pub(crate) fn stage(&self) -> StageId {
+        match self {
+            PassId::RasterClear
+            | PassId::RasterLayer0
+            | PassId::RasterLayer1
+            | PassId::RasterLayers => StageId::Raster,
+            PassId::Resolve => StageId::Resolve,
+            PassId::Pyramid | PassId::Ao | PassId::AoBlur => StageId::Ao,
+            PassId::Shadow { .. } => StageId::Shadows,
+            PassId::Direct => StageId::Direct,
+            PassId::Radiosity | PassId::RadiosityTemporal | PassId::RadiosityBlur => {
+                StageId::Radiosity
+            }
+            PassId::Reflections => StageId::Reflections,
+            PassId::Composite => StageId::Composite,
+        }
+    }
+
+    /// Whether the pass draws or resolves the G-buffer (left out when the caller provides one).
+    pub fn is_gbuffer(&self) -> bool {
+        matches!(self.stage(), StageId::Raster | StageId::Resolve)
     }
 }
 
-/// Why an effect does or does not run.
+impl fmt::Display for PassId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// The effects a frame can run, each switched by [`Effects`](crate::Effects) and the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Effect {
+    /// Ambient obscurance (needs an ambient term).
+    Ao,
+    /// Direct light (needs a light).
+    Direct,
+    /// Shadow maps (need direct light and a light that casts shadows).
+    Shadows,
+    /// Screen-space radiosity (needs a light or an emissive material).
+    Radiosity,
+    /// Screen-space reflections (need a reflective material).
+    Reflections,
+}
+
+impl Effect {
+    /// Every effect.
+    pub const ALL: [Effect; 5] =
+        [Effect::Ao, Effect::Direct, Effect::Shadows, Effect::Radiosity, Effect::Reflections];
+
+    /// The effect's name, as `--effects` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::Ao => "ao",
+            Effect::Direct => "direct",
+            Effect::Shadows => "shadows",
+            Effect::Radiosity => "radiosity",
+            Effect::Reflections => "reflections",
+        }
+    }
+}
+
+/// Why an effect does not run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reason {
-    /// It runs.
-    Runs,
     /// Switched off in the settings.
     Disabled,
     /// The scene does not call for it (no ambient term, no light...).
     NotNeeded,
 }
 
-/// The passes of one frame and why.
+/// The passes of one frame, in order, and why each effect left out is left out.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Plan {
     /// G-buffer layers rasterized (layer 1 only when an effect reads it).
     pub layers: u32,
-    /// Ambient obscurance.
-    pub ao: Reason,
     /// Obscurance reads both layers.
     pub ao_two_layers: bool,
-    /// Direct light.
-    pub direct: Reason,
-    /// Screen-space radiosity.
-    pub radiosity: Reason,
-    /// Screen-space reflections.
-    pub reflections: Reason,
-    /// Names of the lights that get shadow maps (pass `shadow.<name>` each).
-    pub shadows: Vec<String>,
-    /// Pass names in order, as `--timings` names them (steady state: a one-pass layer-1
-    /// variant rasterizes both layers in `raster.layers` once it has a previous frame).
-    pub passes: Vec<String>,
+    /// The passes, in the order they are recorded (steady state: a one-pass layer-1 variant
+    /// rasterizes both layers in `raster.layers` once it has a previous frame).
+    pub passes: Vec<PassId>,
+    /// The effects that do not run, and why.
+    pub left_out: Vec<(Effect, Reason)>,
 }
 
 impl Plan {
     /// The plan for a scene with `info` under `settings`.
     pub fn new(info: &SceneInfo, settings: &Settings) -> Plan {
-        let reason = |enabled: bool, needed: bool| match (enabled, needed) {
-            (false, _) => Reason::Disabled,
-            (true, false) => Reason::NotNeeded,
-            (true, true) => Reason::Runs,
+        let e = &settings.effects;
+        let mut left_out = Vec::new();
+        let mut decide = |effect: Effect, enabled: bool, needed: bool| {
+            let reason = match (enabled, needed) {
+                (false, _) => Some(Reason::Disabled),
+                (true, false) => Some(Reason::NotNeeded),
+                (true, true) => None,
+            };
+            if let Some(r) = reason {
+                left_out.push((effect, r));
+            }
+            reason.is_none()
         };
-        let ao =
-            reason(settings.ao.enabled && settings.effects.ao, info.ambient.max_element() > 0.0);
-        let direct = reason(settings.effects.direct, !info.lights.is_empty());
-        let radiosity = reason(
-            settings.radiosity.enabled && settings.effects.radiosity,
+        let ao = decide(Effect::Ao, settings.ao.enabled && e.ao, info.ambient.max_element() > 0.0);
+        let direct = decide(Effect::Direct, e.direct, !info.lights.is_empty());
+        let shadow_lights: Vec<PassId> = info
+            .lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.casts_shadows)
+            .map(|(light, l)| PassId::Shadow { light, name: l.name.clone() })
+            .collect();
+        let shadows = decide(
+            Effect::Shadows,
+            e.shadows && settings.shadows.enabled,
+            direct && !shadow_lights.is_empty(),
+        );
+        let radiosity = decide(
+            Effect::Radiosity,
+            settings.radiosity.enabled && e.radiosity,
             !info.lights.is_empty() || info.emissive,
         );
-        let reflections =
-            reason(settings.reflections.enabled && settings.effects.reflections, info.reflective);
-        let wants_layer1 = (ao == Reason::Runs && settings.ao.two_layers)
-            || radiosity == Reason::Runs
-            || reflections == Reason::Runs;
+        let reflections = decide(
+            Effect::Reflections,
+            settings.reflections.enabled && e.reflections,
+            info.reflective,
+        );
+        let wants_layer1 = (ao && settings.ao.two_layers) || radiosity || reflections;
         let layers = match settings.layers {
             1 => 1,
             2 => 2,
             _ => 1 + u32::from(wants_layer1),
         };
-        let mut passes = vec!["raster.clear".to_string()];
+        let mut passes = vec![PassId::RasterClear];
         if layers == 2 && settings.layer1 != Layer1Variant::TwoPass {
-            passes.push("raster.layers".into());
+            passes.push(PassId::RasterLayers);
         } else {
-            passes.push("raster.layer0".into());
+            passes.push(PassId::RasterLayer0);
             if layers == 2 {
-                passes.push("raster.layer1".into());
+                passes.push(PassId::RasterLayer1);
             }
         }
-        passes.push("resolve".into());
-        if ao == Reason::Runs {
-            passes.extend(["pyramid", "ao"].map(String::from));
+        passes.push(PassId::Resolve);
+        if ao {
+            passes.extend([PassId::Pyramid, PassId::Ao]);
             if settings.ao.blur_radius > 0 {
-                passes.push("ao.blur".into());
+                passes.push(PassId::AoBlur);
             }
         }
-        let shadows: Vec<String> =
-            if direct == Reason::Runs && settings.effects.shadows && settings.shadows.enabled {
-                info.lights.iter().filter(|l| l.casts_shadows).map(|l| l.name.clone()).collect()
-            } else {
-                Vec::new()
-            };
-        passes.extend(shadows.iter().map(|name| format!("shadow.{name}")));
-        if direct == Reason::Runs {
-            passes.push("direct".into());
+        if shadows {
+            passes.extend(shadow_lights);
         }
-        if radiosity == Reason::Runs {
-            passes.extend(["radiosity", "radiosity.temporal"].map(String::from));
+        if direct {
+            passes.push(PassId::Direct);
+        }
+        if radiosity {
+            passes.extend([PassId::Radiosity, PassId::RadiosityTemporal]);
             if settings.radiosity.blur_radius > 0 {
-                passes.push("radiosity.blur".into());
+                passes.push(PassId::RadiosityBlur);
             }
         }
-        if reflections == Reason::Runs {
-            passes.push("reflections".into());
+        if reflections {
+            passes.push(PassId::Reflections);
         }
-        passes.push("composite".into());
-        Plan {
-            layers,
-            ao,
-            ao_two_layers: layers == 2 && settings.ao.two_layers,
-            direct,
-            radiosity,
-            reflections,
-            shadows,
-            passes,
-        }
+        passes.push(PassId::Composite);
+        Plan { layers, ao_two_layers: layers == 2 && settings.ao.two_layers, passes, left_out }
+    }
+
+    /// Whether `effect` runs.
+    pub fn runs(&self, effect: Effect) -> bool {
+        self.reason(effect).is_none()
+    }
+
+    /// Why `effect` does not run (`None`: it runs).
+    pub fn reason(&self, effect: Effect) -> Option<Reason> {
+        self.left_out.iter().find(|(e, _)| *e == effect).map(|(_, r)| *r)
+    }
+
+    /// Whether the plan records `pass`.
+    pub fn contains(&self, pass: &PassId) -> bool {
+        self.passes.contains(pass)
+    }
+
+    /// The lights that get shadow maps: index and name, in atlas order.
+    pub fn shadow_lights(&self) -> impl Iterator<Item = (usize, &str)> {
+        self.passes.iter().filter_map(|p| match p {
+            PassId::Shadow { light, name } => Some((*light, name.as_str())),
+            _ => None,
+        })
+    }
+
+    /// The pass names, in order.
+    pub fn names(&self) -> Vec<String> {
+        self.passes.iter().map(|p| p.name().into_owned()).collect()
     }
 }
 
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let why = |r: Reason| match r {
-            Reason::Runs => "runs",
-            Reason::Disabled => "off (disabled)",
-            Reason::NotNeeded => "off (the scene does not call for it)",
+        let why = |e: Effect| match self.reason(e) {
+            None => "runs",
+            Some(Reason::Disabled) => "off (disabled)",
+            Some(Reason::NotNeeded) => "off (the scene does not call for it)",
         };
         writeln!(f, "layers:  {}", self.layers)?;
         writeln!(
             f,
             "ao:      {}{}",
-            why(self.ao),
+            why(Effect::Ao),
             if self.ao_two_layers { ", two layers" } else { "" }
         )?;
-        writeln!(f, "direct:  {}", why(self.direct))?;
-        writeln!(f, "radiosity: {}", why(self.radiosity))?;
-        writeln!(f, "reflections: {}", why(self.reflections))?;
-        if self.shadows.is_empty() {
+        writeln!(f, "direct:  {}", why(Effect::Direct))?;
+        writeln!(f, "radiosity: {}", why(Effect::Radiosity))?;
+        writeln!(f, "reflections: {}", why(Effect::Reflections))?;
+        let shadows: Vec<&str> = self.shadow_lights().map(|(_, n)| n).collect();
+        if shadows.is_empty() {
             writeln!(f, "shadows: none")?;
         } else {
-            writeln!(f, "shadows: {}", self.shadows.join(", "))?;
+            writeln!(f, "shadows: {}", shadows.join(", "))?;
         }
-        write!(f, "passes:  {}", self.passes.join(", "))
+        write!(f, "passes:  {}", self.names().join(", "))
     }
 }

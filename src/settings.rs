@@ -1,10 +1,12 @@
 //! Settings of a [`Renderer`](crate::Renderer).
 
-use crate::gpu::frame::MAX_IMAGE_SIDE;
+use crate::frame::MAX_IMAGE_SIDE;
 use crate::{Error, Result};
 
 /// How layer 1 (the nearest surface at least Δz behind layer 0) is rasterized.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
 pub enum Layer1Variant {
     /// Exact: a second raster pass against this frame's final layer 0.
     #[default]
@@ -17,7 +19,9 @@ pub enum Layer1Variant {
 }
 
 /// How the G-buffer stores its attributes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
 pub enum Precision {
     /// f32 everything: 64 bytes per pixel per layer.
     #[default]
@@ -42,7 +46,9 @@ impl Precision {
 /// counts, the number of layers the effects read and the G-buffer encoding (full: the packed
 /// encoding measured no faster on lavapipe; it halves the G-buffer's memory); the rest stays as
 /// given.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
 pub enum Preset {
     /// 4 obscurance taps, 5 radiosity taps, layer 0 only: the cheapest point of both fronts.
     Low,
@@ -76,7 +82,9 @@ impl Preset {
 }
 
 /// Which atomics the rasterizer uses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
 pub enum AtomicPath {
     /// 64-bit atomics when the device has them, else 32-bit.
     #[default]
@@ -200,7 +208,9 @@ pub struct RadiositySettings {
 }
 
 /// How the radiosity gather turns its counted taps into irradiance.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
 pub enum Normalization {
     /// `E = pi * sum B(Y) (w.n_X) / sum (w.n_X)`: pi times the cosine-weighted mean radiance of
     /// the counted taps. Surroundings of uniform radiance B give exactly `pi B`, the true
@@ -413,7 +423,7 @@ pub struct Settings {
     /// Screen-space reflections.
     pub reflections: ReflectionSettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
-    pub effects: crate::plan::Effects,
+    pub effects: Effects,
 }
 
 impl Default for Settings {
@@ -431,7 +441,7 @@ impl Default for Settings {
             shadows: ShadowSettings::default(),
             radiosity: RadiositySettings::default(),
             reflections: ReflectionSettings::default(),
-            effects: crate::plan::Effects::default(),
+            effects: Effects::default(),
         }
     }
 }
@@ -478,5 +488,61 @@ impl Settings {
             self.reflections.validate()?;
         }
         Ok(())
+    }
+}
+
+/// The effects a user can switch on or off (`--effects`); the plan runs an enabled effect only
+/// when the scene calls for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Effects {
+    /// Ambient obscurance (needs an ambient term).
+    pub ao: bool,
+    /// Direct light (needs a light).
+    pub direct: bool,
+    /// Shadow maps (need direct light and a light that casts shadows).
+    pub shadows: bool,
+    /// Screen-space radiosity (needs a light or an emissive material).
+    pub radiosity: bool,
+    /// Screen-space reflections (need a reflective material).
+    pub reflections: bool,
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Effects { ao: true, direct: true, shadows: true, radiosity: true, reflections: true }
+    }
+}
+
+impl Effects {
+    /// Parses `auto` (everything the scene calls for) or a comma-separated list (`ao,direct`).
+    pub fn parse(text: &str) -> crate::Result<Effects> {
+        if text.trim() == "auto" {
+            return Ok(Effects::default());
+        }
+        let mut e = Effects {
+            ao: false,
+            direct: false,
+            shadows: false,
+            radiosity: false,
+            reflections: false,
+        };
+        for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            match name {
+                "ao" => e.ao = true,
+                "direct" => e.direct = true,
+                "shadows" => e.shadows = true,
+                "radiosity" => e.radiosity = true,
+                "reflections" => e.reflections = true,
+                other => {
+                    return Err(crate::Error::setting(
+                        "effects",
+                        format!(
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections; or auto)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(e)
     }
 }

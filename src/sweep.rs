@@ -27,6 +27,7 @@ use glam::Vec3;
 
 use crate::environment::Environment;
 use crate::gbuffer::GBufferLayer;
+use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
 use crate::settings::{AoSettings, Layer1Variant, Precision, RadiositySettings, Settings};
 use crate::truth::metrics::{self, ErrorStats};
@@ -270,9 +271,13 @@ pub struct Row {
 }
 
 impl Row {
-    /// Milliseconds of the passes named.
-    pub fn ms_of(&self, names: &[&str]) -> f64 {
-        self.passes.iter().filter(|(n, _)| names.contains(&n.as_str())).map(|(_, ms)| ms).sum()
+    /// Milliseconds of the passes of `effect` ([`PassId::effect`](crate::PassId::effect)).
+    pub fn ms_of(&self, effect: Effect) -> f64 {
+        self.passes
+            .iter()
+            .filter(|(n, _)| PassId::effect_of(n) == Some(effect))
+            .map(|(_, ms)| ms)
+            .sum()
     }
 }
 
@@ -293,17 +298,14 @@ impl Snapshot {
             name: "sweep",
             message: format!("the scene's plan runs no {what}: nothing to measure"),
         };
-        let av = renderer.ao_buffer().ok_or_else(|| missing("obscurance"))?;
-        let av = renderer.read_f32(device, queue, av)?;
-        let radiosity = renderer.radiosity_buffers().ok_or_else(|| missing("radiosity"))?;
-        let e = renderer.read_f32(device, queue, radiosity[4])?;
-        let rgb = |buffer: &wgpu::Buffer| renderer.read_rgb(device, queue, buffer);
+        let terms = renderer.read_terms(device, queue)?;
+        let av = terms.av.ok_or_else(|| missing("obscurance"))?;
         Ok(Snapshot {
             layer0: renderer.read_gbuffer(device, queue, 0)?,
             av: av.iter().take(n).map(|v| Vec3::splat(*v)).collect(),
-            indirect: metrics::weighted_irradiance(&e, n),
-            reflections: renderer.reflections_buffer().map(rgb).transpose()?,
-            hdr: rgb(renderer.hdr_buffer().ok_or_else(|| missing("composite"))?)?,
+            indirect: terms.indirect.ok_or_else(|| missing("radiosity"))?,
+            reflections: terms.reflections,
+            hdr: terms.hdr,
         })
     }
 }
@@ -412,11 +414,6 @@ pub fn measure(
 /// Timed frames per configuration (the median of their times is kept).
 pub const TIMED_FRAMES: usize = 3;
 
-/// The passes whose time an effect costs.
-pub const AO_PASSES: [&str; 3] = ["pyramid", "ao", "ao.blur"];
-/// The passes whose time the radiosity term costs.
-pub const RADIOSITY_PASSES: [&str; 3] = ["radiosity", "radiosity.temporal", "radiosity.blur"];
-
 /// Indices of `points` (ms, error) on the Pareto front (no other point is both faster and more
 /// accurate), sorted by time.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
@@ -434,9 +431,6 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     }
     front
 }
-
-/// The passes whose time the reflections cost.
-pub const REFLECTION_PASSES: [&str; 1] = ["reflections"];
 
 /// Writes `rows` as CSV: the knobs, every pass's ms (one column per pass name), the total, and
 /// per effect its RMSE, MAE, the truth's noise floor and mean and the temporal instability (reflection
@@ -491,11 +485,11 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         out += &format!(
             ",{:.4},{:.4},{:.4}",
             r.total_ms,
-            r.ms_of(&AO_PASSES),
-            r.ms_of(&RADIOSITY_PASSES)
+            r.ms_of(Effect::Ao),
+            r.ms_of(Effect::Radiosity)
         );
         if reflective {
-            out += &format!(",{:.4}", r.ms_of(&REFLECTION_PASSES));
+            out += &format!(",{:.4}", r.ms_of(Effect::Reflections));
         }
         let i = &r.instability;
         let mut stats = vec![(r.ao, i.ao), (r.indirect, i.indirect)];
@@ -523,9 +517,9 @@ fn points(rows: &[Row], ms: impl Fn(&Row) -> f64, error: impl Fn(&Row) -> f32) -
 /// image's RMSE, SSIM and instability; Pareto-optimal rows per effect marked), headed by what
 /// was measured where.
 pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
-    let ao_front = pareto_front(&points(rows, |r| r.ms_of(&AO_PASSES), |r| r.ao.rmse));
+    let ao_front = pareto_front(&points(rows, |r| r.ms_of(Effect::Ao), |r| r.ao.rmse));
     let rad_front =
-        pareto_front(&points(rows, |r| r.ms_of(&RADIOSITY_PASSES), |r| r.indirect.rmse));
+        pareto_front(&points(rows, |r| r.ms_of(Effect::Radiosity), |r| r.indirect.rmse));
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
@@ -560,10 +554,10 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         }
         out += &format!(
             " {:.2} | {:.4}{} | {:.2} | {:.4}{} | {:.2} | {:.4}{} | {:.3} | {:.5} | {:.5} |\n",
-            r.ms_of(&AO_PASSES),
+            r.ms_of(Effect::Ao),
             r.ao.rmse,
             mark(&ao_front),
-            r.ms_of(&RADIOSITY_PASSES),
+            r.ms_of(Effect::Radiosity),
             r.indirect.rmse,
             mark(&rad_front),
             r.total_ms,
@@ -596,12 +590,12 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
         (
             "ambient obscurance",
             RGBColor(31, 119, 180),
-            points(rows, |r| r.ms_of(&AO_PASSES), |r| relative(&r.ao)),
+            points(rows, |r| r.ms_of(Effect::Ao), |r| relative(&r.ao)),
         ),
         (
             "radiosity (multi-bounce)",
             RGBColor(214, 39, 40),
-            points(rows, |r| r.ms_of(&RADIOSITY_PASSES), |r| relative(&r.indirect)),
+            points(rows, |r| r.ms_of(Effect::Radiosity), |r| relative(&r.indirect)),
         ),
     ];
     if rows.iter().all(|r| r.reflections.is_some()) {
@@ -610,7 +604,7 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
             RGBColor(44, 160, 44),
             points(
                 rows,
-                |r| r.ms_of(&REFLECTION_PASSES),
+                |r| r.ms_of(Effect::Reflections),
                 |r| relative(&r.reflections.unwrap_or_default()),
             ),
         ));

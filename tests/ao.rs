@@ -2,9 +2,9 @@
 
 mod common;
 
-use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture, soup};
+use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, render, shade_fixture, soup};
 use deep_gbuffer::cpu::{ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid};
-use deep_gbuffer::passes::pyramid::PyramidLayout;
+use deep_gbuffer::frame::PyramidLayout;
 use deep_gbuffer::{AoSettings, Camera, Scene, Settings};
 use glam::Vec3;
 
@@ -34,13 +34,8 @@ fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
     let expected = cpu_ao::ao(&r.frame, &ao, &layers[0].samples, &layout, &pyramids[0], p1);
     let raw =
         r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_raw_buffer().unwrap()).unwrap();
-    let flipped =
-        raw.iter().zip(&expected).filter(|(a, b)| (**a - **b).abs() > AO_TOLERANCE).count();
-    assert!(
-        (flipped as f64) <= AO_FLIPPED_FRACTION * raw.len() as f64,
-        "{flipped} of {} pixels differ from the CPU reference",
-        raw.len()
-    );
+    let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
+    assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, "AV against the CPU reference");
     assert!(raw.iter().all(|v| (0.0..=1.0).contains(v)), "AV in [0, 1]");
 
     // The blur, from the GPU's own raw AV, against the CPU blur.
@@ -180,13 +175,8 @@ fn a_right_angle_corner_matches_the_closed_form() {
     // Rasterized depths are interpolated in f32 and differ from the exact ones in the last bits;
     // O is continuous in the tap point, so AV moves by far less than this.
     const EXACT_TOLERANCE: f32 = 1e-3;
-    let flipped =
-        raw.iter().zip(&expected).filter(|(a, b)| (**a - **b).abs() > EXACT_TOLERANCE).count();
-    assert!(
-        (flipped as f64) <= AO_FLIPPED_FRACTION * expected.len() as f64,
-        "{flipped} of {} pixels differ from the closed form",
-        expected.len()
-    );
+    let far = |a: &f32, b: &f32| (a - b).abs() > EXACT_TOLERANCE;
+    assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, "AV against the closed form");
     let mut far = 0;
     let mut crease = Vec::new();
     for (p, s) in exact.iter().enumerate() {
@@ -236,14 +226,8 @@ fn obscurance_of_stored_gbuffers_matches_cpu_reference() {
                 .renderer
                 .read_f32(&g.device, &g.queue, f.renderer.ao_raw_buffer().unwrap())
                 .unwrap();
-            let flipped =
-                raw.iter().zip(&expected).filter(|(a, b)| (**a - **b).abs() > AO_TOLERANCE).count();
-            assert!(
-                (flipped as f64) <= AO_FLIPPED_FRACTION * expected.len() as f64,
-                "{}: {flipped} of {} pixels differ",
-                file,
-                expected.len()
-            );
+            let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
+            assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, file);
             let min = expected.iter().copied().fold(1.0, f32::min);
             assert!(min < 0.9, "{}: the view holds obscured pixels ({min})", file);
         }

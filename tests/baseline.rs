@@ -5,7 +5,7 @@ mod common;
 
 use common::{gpu, render};
 use deep_gbuffer::gbuffer::vis_id;
-use deep_gbuffer::passes::baseline::BaselinePass;
+use deep_gbuffer::testing::BaselinePass;
 use deep_gbuffer::{Scene, Settings};
 
 #[test]

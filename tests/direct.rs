@@ -55,8 +55,7 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     let gpu_atlas: Vec<u64> = bytemuck::pod_collect_to_vec(&gpu_atlas);
     assert!(gpu_atlas == atlas, "the GPU's shadow maps equal the CPU rasterizer's");
     let expected = cpu_direct::direct(&r.frame, &layer0.samples, &lights, Some(&shadows));
-    let actual =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    let actual = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
     let mut lit = 0;
     for (p, (a, b)) in actual.iter().zip(&expected).enumerate() {
         assert!(close(*a, *b), "direct at pixel {p}: gpu {a} cpu {b}");
@@ -68,7 +67,7 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     let av = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
     let irradiance = r
         .renderer
-        .read_f32(&g.device, &g.queue, r.renderer.radiosity_buffers().unwrap()[4])
+        .read_f32(&g.device, &g.queue, r.renderer.radiosity_buffers().unwrap().irradiance)
         .unwrap();
     let irradiance: Vec<glam::Vec4> = irradiance
         .chunks_exact(4)
@@ -82,7 +81,7 @@ fn cornell_direct_and_composite_match_cpu_reference() {
         Some(&irradiance),
         scene.ambient,
     );
-    let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer().unwrap()).unwrap();
+    let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer()).unwrap();
     for (p, (a, b)) in hdr.iter().zip(&expected).enumerate() {
         assert!(close(*a, *b), "composite at pixel {p}: gpu {a} cpu {b}");
         assert!(a.is_finite() && a.min_element() >= 0.0);
@@ -117,8 +116,7 @@ fn a_lit_plane_has_the_closed_form_radiance() {
     };
     let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(16, 16) });
     let g = gpu();
-    let direct =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    let direct = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
     let a = roughness * roughness;
     let expected = 3.0 * (albedo / PI + 0.04 / (4.0 * PI * a * a));
     for d in &direct {
@@ -135,10 +133,9 @@ fn a_scene_without_light_has_zero_direct_radiance() {
         &scene.camera_or_default(),
         Settings { timings: false, ..Settings::with_size(32, 24) },
     );
-    assert!(!r.renderer.passes().iter().any(|p| p == "direct"));
+    assert!(!r.renderer.passes().contains(&deep_gbuffer::PassId::Direct));
     let g = gpu();
-    let direct =
-        r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+    let direct = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
     assert!(direct.iter().all(|d| *d == Vec3::ZERO));
 }
 
@@ -159,8 +156,7 @@ fn direct_light_of_stored_gbuffers_matches_cpu_reference() {
             pcf: Settings::default().shadows.pcf,
         };
         let expected = cpu_direct::direct(&f.frame, &f.layers[0].samples, &lights, Some(&shadows));
-        let actual =
-            f.renderer.read_rgb(&g.device, &g.queue, f.renderer.direct_buffer().unwrap()).unwrap();
+        let actual = f.renderer.read_rgb(&g.device, &g.queue, f.renderer.direct_buffer()).unwrap();
         for (p, (a, b)) in actual.iter().zip(&expected).enumerate() {
             let rough = f.layers[0].samples[p].roughness;
             let ok = if rough >= SMOOTH { close(*a, *b) } else { close_specular(*a, *b) };

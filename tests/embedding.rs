@@ -181,7 +181,7 @@ fn composite_into_the_hosts_storage_texture() {
     );
     queue.submit([encoder.finish()]);
     let bytes = deep_gbuffer::gpu::map_read(&device, &readback).unwrap();
-    let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer().unwrap()).unwrap();
+    let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer()).unwrap();
     let half = |b: &[u8]| {
         let h = u16::from_le_bytes([b[0], b[1]]);
         let (sign, exp, frac) =
@@ -306,7 +306,7 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             renderer.render(&device, &queue, scene, &camera).unwrap();
             counts.push(renderer.diagnostics(&device, &queue).unwrap());
         }
-        let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer().unwrap()).unwrap();
+        let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer()).unwrap();
         (hdr, counts)
     };
     let (expected, clean) = frame(&reference);

@@ -15,12 +15,6 @@ use glam::Vec3;
 /// rounding boundary of the 8-bit encoding.
 const GOLDEN_TOLERANCE: u8 = 2;
 
-fn srgb8(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
-}
-
 #[test]
 fn cornell_matches_golden_image() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
@@ -31,10 +25,10 @@ fn cornell_matches_golden_image() {
         Settings { timings: false, ..Settings::with_size(w, h) },
     );
     let g = gpu();
-    let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer().unwrap()).unwrap();
+    let hdr = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.hdr_buffer()).unwrap();
     let image: Vec<u8> = output::tonemap(&hdr, 1.0)
         .iter()
-        .flat_map(|c| [srgb8(c.x), srgb8(c.y), srgb8(c.z)])
+        .flat_map(|c| [output::srgb8(c.x), output::srgb8(c.y), output::srgb8(c.z)])
         .collect();
     let path = fixture("golden/cornell.png");
     if std::env::var_os("DEEP_GBUFFER_UPDATE_GOLDEN").is_some() {
@@ -61,8 +55,7 @@ fn cornell_matches_golden_image() {
             .map(|(a, b)| a.abs_diff(*b).saturating_mul(16))
             .collect();
         image::RgbImage::from_raw(w, h, diff).unwrap().save(dir.join("cornell-diff.png")).unwrap();
-        let direct =
-            r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer().unwrap()).unwrap();
+        let direct = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
         output::write_png_linear(
             &dir.join("cornell-direct.png"),
             w,

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{gpu, mesh, soup};
+use common::{gpu, mesh, read4, soup};
 use std::f32::consts::PI;
 
 use deep_gbuffer::cpu::frame::{mat_mul, view_position};
@@ -20,13 +20,6 @@ struct Checked {
     /// Pixels with a layer-0 surface.
     surfaces: usize,
     renderer: Renderer,
-}
-
-fn vec4s(r: &Renderer, b: &wgpu::Buffer) -> Vec<Vec4> {
-    let g = gpu();
-    let n = (r.settings().width * r.settings().height) as usize;
-    let v = r.read_f32(&g.device, &g.queue, b).unwrap();
-    v.chunks_exact(4).take(n).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect()
 }
 
 /// Relative slack on the upper bounds below: the GPU and this test compute the world point and
@@ -75,19 +68,17 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
             assert!(x.truncate().min_element() >= 0.0, "{what}: {name} pixel {p} is {x}");
         }
     };
-    let hdr = vec4s(r, r.hdr_buffer().expect("a frame"));
+    let hdr = read4(r, r.hdr_buffer());
     finite_nonneg("hdr", &hdr);
-    if let Some(b) = r.direct_buffer() {
-        let direct = vec4s(r, b);
-        finite_nonneg("direct", &direct);
-        for (p, (l, s)) in direct.iter().zip(&layer0.samples).enumerate() {
-            if s.depth > 0.0 {
-                let bound = direct_bound(s, world(p), &lights) * (1.0 + BOUND_SLACK);
-                assert!(
-                    l.truncate().cmple(bound).all(),
-                    "{what}: direct radiance {l} at pixel {p} above what the lights deliver, {bound}"
-                );
-            }
+    let direct = read4(r, r.direct_buffer());
+    finite_nonneg("direct", &direct);
+    for (p, (l, s)) in direct.iter().zip(&layer0.samples).enumerate() {
+        if s.depth > 0.0 {
+            let bound = direct_bound(s, world(p), &lights) * (1.0 + BOUND_SLACK);
+            assert!(
+                l.truncate().cmple(bound).all(),
+                "{what}: direct radiance {l} at pixel {p} above what the lights deliver, {bound}"
+            );
         }
     }
     if let Some(av) = r.ao_buffer() {
@@ -98,8 +89,8 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
     }
     if let Some(buffers) = r.radiosity_buffers() {
         let mut values = Vec::new();
-        for (name, b) in ["b0", "b1", "raw", "history", "blurred"].iter().zip(buffers) {
-            let v = vec4s(r, b);
+        for (name, b) in buffers.named() {
+            let v = read4(r, b);
             finite_nonneg(name, &v);
             assert!(v.iter().all(|x| x.w <= 1.0), "{what}: {name} confidence above 1");
             values.push(v);
@@ -115,7 +106,7 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
         }
     }
     if let Some(b) = r.reflections_buffer() {
-        finite_nonneg("reflections", &vec4s(r, b));
+        finite_nonneg("reflections", &read4(r, b));
     }
     for s in &layer0.samples {
         assert!(s.depth.is_finite() && s.depth >= 0.0, "{what}: depth {}", s.depth);
@@ -244,8 +235,8 @@ fn bad_normals_and_coincident_triangles() {
     let a = check(&scene, &camera, small(), 1, "coincident quads");
     let b = check(&scene, &camera, small(), 1, "coincident quads again");
     let g = gpu();
-    let ha = a.renderer.read_rgb(&g.device, &g.queue, a.renderer.hdr_buffer().unwrap()).unwrap();
-    let hb = b.renderer.read_rgb(&g.device, &g.queue, b.renderer.hdr_buffer().unwrap()).unwrap();
+    let ha = a.renderer.read_rgb(&g.device, &g.queue, a.renderer.hdr_buffer()).unwrap();
+    let hb = b.renderer.read_rgb(&g.device, &g.queue, b.renderer.hdr_buffer()).unwrap();
     assert_eq!(ha, hb, "the same winner on every run");
 }
 
@@ -301,7 +292,7 @@ fn mirrors_facing_the_camera_and_at_grazing_angles() {
     // Every surface a mirror: rays toward the camera (the back wall), grazing (floor and walls
     // seen at an angle) and leaving the screen; each ends within its 48 steps.
     let c = check(&scene, &camera, small(), 2, "all mirrors");
-    assert!(c.renderer.passes().iter().any(|p| p == "reflections"));
+    assert!(c.renderer.passes().contains(&deep_gbuffer::PassId::Reflections));
     let grazing =
         Camera::perspective(Vec3::new(0.0, 0.02, 1.5), Vec3::new(0.0, 0.0, -1.0), 60.0, 0.01);
     check(&scene, &grazing, small(), 2, "grazing mirrors");
@@ -449,8 +440,9 @@ fn temporal_cut_and_an_object_moving_away() {
     r.render(&g.device, &g.queue, &moved_buffers, &camera).unwrap();
     check_buffers(&r, &moved, "the box moved away");
     let after = r.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-    let [.., raw, history, _] = r.radiosity_buffers().unwrap();
-    let (raw, history) = (vec4s(&r, raw), vec4s(&r, history));
+    let deep_gbuffer::RadiosityBuffers { gathered: raw, filtered: history, .. } =
+        r.radiosity_buffers().unwrap();
+    let (raw, history) = (read4(&r, raw), read4(&r, history));
     let mut uncovered = 0;
     for p in 0..after.samples.len() {
         let (was, now) = (&before_cut.samples[p], &after.samples[p]);
@@ -481,7 +473,7 @@ fn resize_between_frames() {
     let first_frame = |settings: Settings| {
         let mut fresh = Renderer::new(&g.device, &g.queue, settings).unwrap();
         fresh.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        vec4s(&fresh, fresh.hdr_buffer().unwrap())
+        read4(&fresh, fresh.hdr_buffer())
     };
     let mut r = Renderer::new(&g.device, &g.queue, small()).unwrap();
     for _ in 0..4 {
@@ -491,7 +483,7 @@ fn resize_between_frames() {
         r.resize(&g.device, &g.queue, w, h).unwrap();
         r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
         check_buffers(&r, &scene, &format!("resized to {w}x{h}"));
-        let image = vec4s(&r, r.hdr_buffer().unwrap());
+        let image = read4(&r, r.hdr_buffer());
         assert_eq!(image.len(), (w * h) as usize);
         let expected = first_frame(Settings { width: w, height: h, ..small() });
         assert!(image == expected, "the first frame after resizing to {w}x{h} kept history");

@@ -48,11 +48,10 @@ fn run() -> (Vec<u32>, Vec<f64>, Vec<u64>) {
         };
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
         if (i + 1) % WINDOW == 0 {
-            let hdr =
-                renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer().unwrap()).unwrap();
+            let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer()).unwrap();
             assert!(hdr.iter().all(|c| c.is_finite()), "frame {i}: a non-finite pixel");
             let history = renderer
-                .read_f32(&g.device, &g.queue, renderer.radiosity_buffers().unwrap()[3])
+                .read_f32(&g.device, &g.queue, renderer.radiosity_buffers().unwrap().filtered)
                 .unwrap();
             assert!(history.iter().all(|v| v.is_finite()), "frame {i}: a non-finite history");
             times.push(window.elapsed().as_secs_f64() * 1e3 / f64::from(WINDOW));
@@ -60,7 +59,7 @@ fn run() -> (Vec<u32>, Vec<f64>, Vec<u64>) {
             window = std::time::Instant::now();
         }
     }
-    let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer().unwrap()).unwrap();
+    let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer()).unwrap();
     (hdr.iter().flat_map(|c| c.to_array().map(f32::to_bits)).collect(), times, memory)
 }
 

@@ -4,8 +4,9 @@
 mod common;
 
 use common::{gpu, render_frames};
-use deep_gbuffer::plan::Reason;
-use deep_gbuffer::{AoSettings, Effects, Layer1Variant, Plan, Scene, SceneInfo, Settings};
+use deep_gbuffer::{
+    AoSettings, Effect, Effects, Layer1Variant, PassId, Plan, Reason, Scene, SceneInfo, Settings,
+};
 use glam::Vec3;
 
 fn no_radiosity() -> deep_gbuffer::RadiositySettings {
@@ -16,13 +17,15 @@ fn no_radiosity() -> deep_gbuffer::RadiositySettings {
 fn radiosity_reads_layer_1_and_needs_light() {
     let plan =
         Plan::new(&SceneInfo { ambient: Vec3::ZERO, ..cornell_info() }, &Settings::default());
-    assert_eq!((plan.layers, plan.radiosity), (2, Reason::Runs));
+    assert_eq!((plan.layers, plan.reason(Effect::Radiosity)), (2, None));
     let dark = SceneInfo { lights: Vec::new(), emissive: false, ..cornell_info() };
-    assert_eq!(Plan::new(&dark, &Settings::default()).radiosity, Reason::NotNeeded);
-    let glowing = SceneInfo { lights: Vec::new(), ..cornell_info() };
     assert_eq!(
-        Plan::new(&glowing, &Settings::default()).radiosity,
-        Reason::Runs,
+        Plan::new(&dark, &Settings::default()).reason(Effect::Radiosity),
+        Some(Reason::NotNeeded)
+    );
+    let glowing = SceneInfo { lights: Vec::new(), ..cornell_info() };
+    assert!(
+        Plan::new(&glowing, &Settings::default()).runs(Effect::Radiosity),
         "emission alone lights the scene"
     );
 }
@@ -34,25 +37,31 @@ fn cornell_info() -> SceneInfo {
 #[test]
 fn cornell_runs_everything_it_has() {
     let plan = Plan::new(&cornell_info(), &Settings::default());
-    assert_eq!((plan.layers, plan.ao, plan.direct), (2, Reason::Runs, Reason::Runs));
+    assert_eq!(plan.layers, 2);
+    assert_eq!(plan.left_out, [(Effect::Reflections, Reason::NotNeeded)], "no mirror in the box");
     assert_eq!(
         plan.passes,
         [
-            "raster.clear",
-            "raster.layer0",
-            "raster.layer1",
-            "resolve",
-            "pyramid",
-            "ao",
-            "ao.blur",
-            "shadow.ceiling",
-            "direct",
-            "radiosity",
-            "radiosity.temporal",
-            "radiosity.blur",
-            "composite"
+            PassId::RasterClear,
+            PassId::RasterLayer0,
+            PassId::RasterLayer1,
+            PassId::Resolve,
+            PassId::Pyramid,
+            PassId::Ao,
+            PassId::AoBlur,
+            ceiling_shadow(),
+            PassId::Direct,
+            PassId::Radiosity,
+            PassId::RadiosityTemporal,
+            PassId::RadiosityBlur,
+            PassId::Composite
         ]
     );
+    assert_eq!(plan.names()[7], "shadow.ceiling");
+}
+
+fn ceiling_shadow() -> PassId {
+    PassId::Shadow { light: 0, name: "ceiling".into() }
 }
 
 #[test]
@@ -60,10 +69,17 @@ fn no_ambient_means_no_obscurance_and_no_second_layer() {
     let info = SceneInfo { ambient: Vec3::ZERO, ..cornell_info() };
     // Radiosity reads layer 1 too: with it off, nothing does.
     let plan = Plan::new(&info, &Settings { radiosity: no_radiosity(), ..Settings::default() });
-    assert_eq!((plan.layers, plan.ao), (1, Reason::NotNeeded));
+    assert_eq!((plan.layers, plan.reason(Effect::Ao)), (1, Some(Reason::NotNeeded)));
     assert_eq!(
         plan.passes,
-        ["raster.clear", "raster.layer0", "resolve", "shadow.ceiling", "direct", "composite"]
+        [
+            PassId::RasterClear,
+            PassId::RasterLayer0,
+            PassId::Resolve,
+            ceiling_shadow(),
+            PassId::Direct,
+            PassId::Composite
+        ]
     );
 }
 
@@ -71,8 +87,9 @@ fn no_ambient_means_no_obscurance_and_no_second_layer() {
 fn no_light_means_no_direct_pass() {
     let info = SceneInfo { lights: Vec::new(), ..cornell_info() };
     let plan = Plan::new(&info, &Settings::default());
-    assert_eq!(plan.direct, Reason::NotNeeded);
-    assert!(!plan.passes.iter().any(|p| p == "direct" || p.starts_with("shadow.")));
+    assert_eq!(plan.reason(Effect::Direct), Some(Reason::NotNeeded));
+    assert_eq!(plan.reason(Effect::Shadows), Some(Reason::NotNeeded));
+    assert!(!plan.passes.iter().any(|p| matches!(p, PassId::Direct | PassId::Shadow { .. })));
 }
 
 #[test]
@@ -81,24 +98,25 @@ fn switched_off_effects_cost_nothing() {
     let only_direct =
         Settings { effects: Effects::parse("direct").unwrap(), ..Settings::default() };
     let plan = Plan::new(&info, &only_direct);
-    assert_eq!((plan.layers, plan.ao), (1, Reason::Disabled));
+    assert_eq!((plan.layers, plan.reason(Effect::Ao)), (1, Some(Reason::Disabled)));
     let one_layer_ao = Settings {
         ao: AoSettings { two_layers: false, ..Default::default() },
         radiosity: no_radiosity(),
         ..Settings::default()
     };
     let plan = Plan::new(&info, &one_layer_ao);
-    assert_eq!((plan.layers, plan.ao, plan.ao_two_layers), (1, Reason::Runs, false));
+    assert_eq!((plan.layers, plan.runs(Effect::Ao), plan.ao_two_layers), (1, true, false));
     let no_blur =
         Settings { ao: AoSettings { blur_radius: 0, ..Default::default() }, ..Settings::default() };
-    assert!(!Plan::new(&info, &no_blur).passes.iter().any(|p| p == "ao.blur"));
+    assert!(!Plan::new(&info, &no_blur).contains(&PassId::AoBlur));
     let forced =
         Settings { layers: 2, effects: Effects::parse("direct").unwrap(), ..Settings::default() };
     assert_eq!(Plan::new(&info, &forced).layers, 2, "a host can ask for layer 1 itself");
     let no_shadows =
         Settings { effects: Effects::parse("ao,direct").unwrap(), ..Settings::default() };
     let plan = Plan::new(&info, &no_shadows);
-    assert!(plan.shadows.is_empty() && !plan.passes.iter().any(|p| p.starts_with("shadow.")));
+    assert_eq!(plan.reason(Effect::Shadows), Some(Reason::Disabled));
+    assert!(plan.shadow_lights().next().is_none());
     assert!(Effects::parse("ao,bogus").unwrap_err().to_string().contains("bogus"));
     assert_eq!(Effects::parse("auto").unwrap(), Effects::default());
 }
@@ -107,7 +125,7 @@ fn switched_off_effects_cost_nothing() {
 fn one_pass_variants_plan_raster_layers() {
     let settings = Settings { layer1: Layer1Variant::Reproject, ..Settings::default() };
     let plan = Plan::new(&cornell_info(), &settings);
-    assert_eq!(&plan.passes[..3], ["raster.clear", "raster.layers", "resolve"]);
+    assert_eq!(&plan.passes[..3], [PassId::RasterClear, PassId::RasterLayers, PassId::Resolve]);
 }
 
 /// The passes recorded, and the passes timed, are exactly the plan's.
@@ -133,7 +151,7 @@ fn the_renderer_runs_and_times_exactly_the_plan() {
         assert_eq!(r.renderer.passes(), &plan.passes[..]);
         let timed: Vec<String> =
             r.renderer.timings(&g.device).unwrap().into_iter().map(|t| t.name).collect();
-        assert_eq!(timed, plan.passes, "ambient {ambient} {variant:?}");
+        assert_eq!(timed, plan.names(), "ambient {ambient} {variant:?}");
     }
 }
 

@@ -4,7 +4,7 @@ mod common;
 
 use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture};
 use deep_gbuffer::cpu::pyramid as cpu;
-use deep_gbuffer::passes::pyramid::PyramidLayout;
+use deep_gbuffer::frame::PyramidLayout;
 use deep_gbuffer::{Scene, Settings};
 
 #[test]

@@ -4,9 +4,9 @@
 
 mod common;
 
-use common::{GBUFFER_FIXTURES, gpu, render_frames, shade_fixture};
+use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render_frames, shade_fixture};
 use deep_gbuffer::cpu::radiosity as cpu;
-use deep_gbuffer::passes::radiosity::RadiosityUniform;
+use deep_gbuffer::frame::RadiosityUniform;
 use deep_gbuffer::{
     Boost, Normalization, RadiositySettings, Renderer, Scene, SceneBuffers, Settings,
 };
@@ -17,13 +17,6 @@ use glam::Vec4;
 /// must stay rare; the rest agree to f32 rounding of the sums.
 const RADIOSITY_TOLERANCE: f32 = 1e-3;
 const RADIOSITY_FLIPPED_FRACTION: f64 = 0.02;
-
-fn read4(r: &Renderer, buffer: &wgpu::Buffer) -> Vec<Vec4> {
-    let g = gpu();
-    let v = r.read_f32(&g.device, &g.queue, buffer).unwrap();
-    let n = (r.settings().width * r.settings().height) as usize;
-    v.chunks_exact(4).take(n).map(|c| Vec4::new(c[0], c[1], c[2], c[3])).collect()
-}
 
 fn settings(w: u32, h: u32) -> Settings {
     Settings { timings: false, ..Settings::with_size(w, h) }
@@ -62,20 +55,20 @@ fn first_frame_against_cpu(radiosity: RadiositySettings) {
 /// irradiance and confidence.
 fn first_frame_matches(
     renderer: &Renderer,
-    frame: &deep_gbuffer::gpu::FrameUniform,
+    frame: &deep_gbuffer::frame::FrameUniform,
     layers: [&[deep_gbuffer::GSample]; 2],
     radiosity: &RadiositySettings,
     what: &str,
 ) -> Vec<Vec4> {
     let g = gpu();
-    let [b0, b1, raw, _, _] = renderer.radiosity_buffers().expect("radiosity runs");
+    let deep_gbuffer::RadiosityBuffers { outgoing: [b0, b1], gathered: raw, .. } =
+        renderer.radiosity_buffers().expect("radiosity runs");
     let b = [b0, b1].map(|b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
     let raw = read4(renderer, raw);
     // B without history is boosted direct + emission (direct of layer 0 checked in
     // tests/direct.rs).
     let uniform = RadiosityUniform::new(radiosity, false, 0);
-    let direct0 =
-        renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer().unwrap()).unwrap();
+    let direct0 = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer()).unwrap();
     let expected_b0 = cpu::feedback_without_history(&uniform, layers[0], &direct0);
     for (a, e) in b[0].iter().zip(&expected_b0) {
         assert!(
@@ -84,18 +77,11 @@ fn first_frame_matches(
         );
     }
     let expected = cpu::gather(frame, &uniform, layers, [&b[0], &b[1]]);
-    let differ = raw
-        .iter()
-        .zip(&expected)
-        .filter(|(a, e)| {
-            (**a - **e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
-        })
-        .count();
-    assert!(
-        (differ as f64) <= RADIOSITY_FLIPPED_FRACTION * raw.len() as f64,
-        "{what}: {differ} of {} pixels differ from the CPU gather",
-        raw.len()
-    );
+    let far = |a: &Vec4, e: &Vec4| {
+        (*a - *e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
+    };
+    let what = format!("{what}: the gather against the CPU's");
+    assert_few_differ(&raw, &expected, RADIOSITY_FLIPPED_FRACTION, far, &what);
     assert!(raw.iter().all(|e| e.is_finite() && e.min_element() >= 0.0 && e.w <= 1.0));
     raw
 }
@@ -116,7 +102,7 @@ fn a_static_camera_converges_and_a_cut_resets() {
     let mut frames = Vec::new();
     for _ in 0..120 {
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        frames.push(read4(&renderer, renderer.radiosity_buffers().unwrap()[3]));
+        frames.push(read4(&renderer, renderer.radiosity_buffers().unwrap().filtered));
     }
     let change = |a: &[Vec4], b: &[Vec4]| {
         a.iter().zip(b).map(|(x, y)| (*x - *y).truncate().abs().max_element()).fold(0.0, f32::max)
@@ -136,7 +122,7 @@ fn a_static_camera_converges_and_a_cut_resets() {
     // A camera cut: the history is dropped, the next frame is a first frame again.
     renderer.reset_history();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-    let after_cut = read4(&renderer, renderer.radiosity_buffers().unwrap()[3]);
+    let after_cut = read4(&renderer, renderer.radiosity_buffers().unwrap().filtered);
     assert_eq!(after_cut, frames[0], "after a cut the history does not leak into the frame");
 }
 
@@ -170,14 +156,19 @@ fn nan_input_never_enters_the_history() {
     for _ in 0..1000 {
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     }
-    let [b0, b1, raw, history, blurred] = renderer.radiosity_buffers().unwrap();
+    let deep_gbuffer::RadiosityBuffers {
+        outgoing: [b0, b1],
+        gathered: raw,
+        filtered: history,
+        irradiance: blurred,
+    } = renderer.radiosity_buffers().unwrap();
     for (name, buffer) in
         [("b0", b0), ("b1", b1), ("raw", raw), ("history", history), ("blurred", blurred)]
     {
         let values = read4(&renderer, buffer);
         assert!(values.iter().all(|v| v.is_finite()), "{name} holds a non-finite value");
     }
-    let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer().unwrap()).unwrap();
+    let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer()).unwrap();
     let bad = hdr.iter().filter(|c| !c.is_finite()).count();
     // The NaN emission shows only where that material is seen directly (the composite adds it);
     // it spreads nowhere else.
@@ -221,7 +212,12 @@ fn a_closed_white_box_converges_to_the_closed_form_and_never_exceeds_it() {
     let mut last = Vec::new();
     for frame in 0..200 {
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let [_, _, raw, history, blurred] = renderer.radiosity_buffers().unwrap();
+        let deep_gbuffer::RadiosityBuffers {
+            gathered: raw,
+            filtered: history,
+            irradiance: blurred,
+            ..
+        } = renderer.radiosity_buffers().unwrap();
         for (name, buffer) in [("raw", raw), ("history", history), ("blurred", blurred)] {
             let values = read4(&renderer, buffer);
             let max = values.iter().map(|v| v.truncate().max_element()).fold(0.0, f32::max);

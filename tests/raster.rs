@@ -4,9 +4,10 @@
 mod common;
 
 use common::{fixture, gpu, mesh, render, render_frames, soup};
+use deep_gbuffer::PassId;
 use deep_gbuffer::cpu::raster::{self as cpu, RasterInput, double_sided_triangles};
+use deep_gbuffer::frame::FrameUniform;
 use deep_gbuffer::gbuffer::{VIS_EMPTY, vis_depth, vis_id};
-use deep_gbuffer::gpu::FrameUniform;
 use deep_gbuffer::scene::{Camera, Projection};
 use deep_gbuffer::{AtomicPath, Layer1Variant, Scene, SceneBuffers, Settings};
 use glam::Vec3;
@@ -142,7 +143,7 @@ fn grid(n: usize, lo: f32, hi: f32, z: f32, jitter: f32, seed: u64) -> Scene {
 fn coverage(scene: &Scene, frame: &FrameUniform) -> Vec<u32> {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g.device, scene).unwrap();
-    deep_gbuffer::passes::raster::coverage_counts(&g.device, &g.queue, &buffers, frame).unwrap()
+    deep_gbuffer::testing::coverage_counts(&g.device, &g.queue, &buffers, frame).unwrap()
 }
 
 fn frame_for(scene: &Scene, camera: &Camera, width: u32, height: u32) -> FrameUniform {
@@ -284,7 +285,10 @@ fn one_pass_variants_equal_two_pass_on_a_static_camera() {
             &[camera.clone(), camera.clone()],
             Settings { layer1, ..base.clone() },
         );
-        assert_eq!(r.renderer.passes()[..3], ["raster.clear", "raster.layers", "resolve"]);
+        assert_eq!(
+            r.renderer.passes()[..3],
+            [PassId::RasterClear, PassId::RasterLayers, PassId::Resolve]
+        );
         assert_eq!(r.vis0, exact.vis0, "{layer1:?} layer 0");
         let (n, report) = mismatches(&r.vis1, &exact.vis1, 96);
         assert_eq!(n, 0, "{layer1:?} layer 1 differs from TwoPass at {n} pixels:{report}");
@@ -298,7 +302,7 @@ fn first_frame_of_a_one_pass_variant_is_two_pass() {
         render(&scene, &camera, Settings { layer1: Layer1Variant::Reproject, ..settings(32, 24) });
     assert_eq!(
         r.renderer.passes()[..4],
-        ["raster.clear", "raster.layer0", "raster.layer1", "resolve"]
+        [PassId::RasterClear, PassId::RasterLayer0, PassId::RasterLayer1, PassId::Resolve]
     );
 }
 
@@ -419,7 +423,7 @@ fn sizes_beyond_the_device_are_refused_with_the_limit() {
     let limit = g.device.limits().max_storage_buffer_binding_size;
     // A square whose full-precision layer (64 bytes a pixel) just exceeds the binding limit.
     let side = ((limit / 64) as f64).sqrt() as u32 + 2;
-    if side <= deep_gbuffer::gpu::frame::MAX_IMAGE_SIDE {
+    if side <= deep_gbuffer::frame::MAX_IMAGE_SIDE {
         match deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(side, side)) {
             Err(deep_gbuffer::Error::ExceedsLimit { needed, limit: l, .. }) => assert!(needed > l),
             Err(e) => panic!("unexpected error {e}"),

@@ -3,9 +3,9 @@
 
 mod common;
 
-use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture};
+use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render, shade_fixture};
 use deep_gbuffer::cpu::reflections as cpu;
-use deep_gbuffer::passes::reflections::ReflectionsUniform;
+use deep_gbuffer::frame::ReflectionsUniform;
 use deep_gbuffer::scene::{Material, MeshData};
 use deep_gbuffer::{Camera, Environment, Error, Renderer, Scene, SceneBuffers, Settings};
 use glam::{Vec3, Vec4};
@@ -15,23 +15,12 @@ use glam::{Vec3, Vec4};
 /// border, can hit one step apart on the two sides. Such pixels must stay rare.
 const FLIPPED_FRACTION: f64 = 0.02;
 
-fn read4(r: &deep_gbuffer::Renderer, b: &wgpu::Buffer) -> Vec<Vec4> {
-    let g = gpu();
-    let n = (r.settings().width * r.settings().height) as usize;
-    r.read_f32(&g.device, &g.queue, b)
-        .unwrap()
-        .chunks_exact(4)
-        .take(n)
-        .map(|c| Vec4::new(c[0], c[1], c[2], c[3]))
-        .collect()
-}
-
 #[test]
 fn reflective_spheres_match_cpu_reference() {
     let scene = Scene::from_spec("builtin:grid-20000").unwrap();
     let s = Settings { timings: false, ..Settings::with_size(80, 60) };
     let r = render(&scene, &scene.camera_or_default(), s);
-    assert!(r.renderer.passes().iter().any(|p| p == "reflections"));
+    assert!(r.renderer.passes().contains(&deep_gbuffer::PassId::Reflections));
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
     let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
@@ -44,13 +33,13 @@ fn reflective_spheres_match_cpu_reference() {
 /// sky `sky`.
 fn march_matches(
     renderer: &Renderer,
-    frame: &deep_gbuffer::gpu::FrameUniform,
+    frame: &deep_gbuffer::frame::FrameUniform,
     layer0: &[deep_gbuffer::GSample],
     vis1: &[u64],
     sky: Vec3,
     what: &str,
 ) {
-    let [b0, b1, ..] = renderer.radiosity_buffers().expect("the scene is lit");
+    let [b0, b1] = renderer.radiosity_buffers().expect("the scene is lit").outgoing;
     let [radiance0, radiance1] =
         [b0, b1].map(|b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
     let s = &renderer.settings().reflections;
@@ -68,15 +57,9 @@ fn march_matches(
     };
     let expected = cpu::reflections(frame, &uniform, layer0, vis1, [&radiance0, &radiance1], None);
     let actual = read4(renderer, renderer.reflections_buffer().unwrap());
-    let differ = actual
-        .iter()
-        .zip(&expected)
-        .filter(|(a, e)| (**a - **e).abs().max_element() > 1e-3 * e.max_element().max(1.0))
-        .count();
-    assert!(
-        (differ as f64) <= FLIPPED_FRACTION * actual.len() as f64,
-        "{what}: {differ} pixels differ from the CPU march"
-    );
+    let far = |a: &Vec4, e: &Vec4| (*a - *e).abs().max_element() > 1e-3 * e.max_element().max(1.0);
+    let what = format!("{what}: the march against the CPU's");
+    assert_few_differ(&actual, &expected, FLIPPED_FRACTION, far, &what);
     assert!(actual.iter().all(|v| v.is_finite()));
     let hits = expected.iter().filter(|v| v.w > 0.5).count();
     assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
@@ -199,7 +182,7 @@ fn nothing_reflective_runs_no_reflection_pass() {
         &scene.camera_or_default(),
         Settings { timings: false, ..Settings::with_size(16, 12) },
     );
-    assert!(!r.renderer.passes().iter().any(|p| p == "reflections"));
+    assert!(!r.renderer.passes().contains(&deep_gbuffer::PassId::Reflections));
     assert!(r.renderer.reflections_buffer().is_none());
 }
 

@@ -249,10 +249,10 @@ fn the_full_image_of_a_sunlit_plane_under_a_uniform_sky() {
     let image = tracer
         .full(&scene, &Shot { camera: &camera, size: (w, h), spp: 4, seed: 1 }, None, 3, &|| ())
         .unwrap();
-    let f = deep_gbuffer::gpu::FrameUniform::new(
+    let f = deep_gbuffer::frame::FrameUniform::new(
         &camera,
-        deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h),
-        deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h),
+        deep_gbuffer::frame::CameraMatrices::new(&camera, w, h),
+        deep_gbuffer::frame::CameraMatrices::new(&camera, w, h),
         w,
         h,
         0.0,
@@ -324,8 +324,8 @@ fn mirror_reflections_show_the_wall_or_the_sky() {
     let full = tracer
         .full(&scene, &Shot { camera: &camera, size: (w, h), spp: 4, seed: 1 }, None, 2, &|| ())
         .unwrap();
-    let m = deep_gbuffer::gpu::frame::CameraMatrices::new(&camera, w, h);
-    let f = deep_gbuffer::gpu::FrameUniform::new(&camera, m, m, w, h, 0.0, (0, 0, 0));
+    let m = deep_gbuffer::frame::CameraMatrices::new(&camera, w, h);
+    let f = deep_gbuffer::frame::FrameUniform::new(&camera, m, m, w, h, 0.0, (0, 0, 0));
     let (mut wall_pixels, mut sky_pixels, mut others) = (0, 0, 0);
     for p in 0..(w * h) as usize {
         let px = glam::Vec2::new((p as u32 % w) as f32 + 0.5, (p as u32 / w) as f32 + 0.5);
@@ -456,7 +456,7 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
     let settings = Settings { effects, ..Settings::with_size(w, h) };
     let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-    let direct = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer().unwrap()).unwrap();
+    let direct = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer()).unwrap();
     let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
     let truth = Tracer::new(&scene)
         .unwrap()

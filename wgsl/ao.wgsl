@@ -20,7 +20,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/spiral.wgsl"
 
-// Mirrors `AoUniform` in src/passes/ao.rs.
+// Mirrors `AoUniform` in src/frame/uniforms.rs.
 struct Ao {
     radius: f32,
     bias: f32,

@@ -11,7 +11,6 @@
 
 const DEPTH_TOLERANCE: f32 = 0.05;
 
-// Mirrors `BlurUniform` in src/passes/blur.rs.
 // The radius in pixels, fixed per pipeline. A pipeline constant, not a uniform: lavapipe
 // specializes shaders on uniform values that bound loops and, fed a new frame each time, kept
 // compiling variants (about 20 ms and 1 MiB a frame at 32x24).

@@ -12,7 +12,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/gbuffer_read.wgsl"
 
-// Mirrors `CompositeUniform` in src/passes/composite.rs.
+// Mirrors `CompositeUniform` in src/frame/uniforms.rs.
 struct Composite {
     ambient: vec3<f32>,
     _pad: u32,

@@ -1,4 +1,5 @@
-// Direct light: deferred shading of the layer-0 G-buffer by every light in one pass
+// Direct light: deferred shading of one G-buffer layer (layer 0, and layer 1 where the radiosity
+// or the reflections read it) by every light in one pass
 // (O(pixels x lights)), written as outgoing radiance (rgb, a = 1 where there is a surface).
 // With SHADOWS, a light with shadow faces is attenuated by percentage-closer filtering of its
 // shadow map ((2 pcf + 1)^2 taps): the point is pushed along its normal by a texel, and compared
@@ -12,7 +13,7 @@
 #include "shared/light.wgsl"
 #include "shared/shadow.wgsl"
 
-// Mirrors `DirectUniform` in src/passes/direct.rs.
+// Mirrors `DirectUniform` in src/frame/uniforms.rs.
 struct Direct {
     light_count: u32,
     pcf: u32,

@@ -1,7 +1,10 @@
 // Fills a u32 buffer with one value (clears visibility buffers to empty).
+// Mirrors `FillParams` in src/frame/uniforms.rs.
 struct FillParams {
     value: u32,
     count: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: FillParams;

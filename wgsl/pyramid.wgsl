@@ -2,7 +2,7 @@
 // Ambient Obscurance. Level 0 copies the G-buffer's view depth; level l + 1 takes one texel of
 // each 2x2 block of level l in a rotated-grid pattern, so every level holds real depths (no
 // averages across edges) and the choice varies from block to block. 0 marks "no surface".
-// All levels are packed into one f32 buffer at offsets from src/passes/pyramid.rs.
+// All levels are packed into one f32 buffer at offsets from `PyramidLayout` (src/frame/pyramid.rs).
 // src/cpu/pyramid.rs is the same on the CPU.
 // defines: PACKED
 

@@ -26,7 +26,7 @@
 #include "shared/spiral.wgsl"
 #include "shared/vis.wgsl"
 
-// Mirrors `RadiosityUniform` in src/passes/radiosity.rs.
+// Mirrors `RadiosityUniform` in src/frame/uniforms.rs.
 struct Radiosity {
     radius: f32,
     samples: u32,

@@ -65,7 +65,7 @@ const MAX_POLY: u32 = 9u;
 @group(0) @binding(12) var<storage, read> texels: array<u32>;
 #endif
 
-// Diagnostics words in `bins` (src/renderer.rs reads them as `Diagnostics`).
+// Diagnostics words in `bins` (`RasterCounters` in src/frame/uniforms.rs).
 const DIAG_INDEX: u32 = 8u;
 const DIAG_MATERIAL: u32 = 9u;
 const DIAG_POSITION: u32 = 10u;

@@ -24,7 +24,7 @@
 const STEPS: u32 = 48u;
 const EDGE_FADE: f32 = 0.1;
 
-// Mirrors `ReflectionsUniform` in src/passes/reflections.rs.
+// Mirrors `ReflectionsUniform` in src/frame/uniforms.rs.
 struct Reflections {
     sky: vec3<f32>,
     max_distance: f32,

@@ -5,9 +5,9 @@ use glam::{Vec2, Vec3, Vec4Swizzles};
 use crate::cpu::frame::mat_mul;
 pub use crate::cpu::frame::view_position;
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
+use crate::frame::FrameUniform;
+use crate::frame::PyramidLayout;
 use crate::gbuffer::GSample;
-use crate::gpu::FrameUniform;
-use crate::passes::pyramid::PyramidLayout;
 use crate::settings::AoSettings;
 
 /// As `texel_origin` in the WGSL: the level-0 pixel a pyramid texel was taken from.

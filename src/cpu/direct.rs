@@ -6,8 +6,8 @@ use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::shadow::{Shadows, shadow};
+use crate::frame::FrameUniform;
 use crate::gbuffer::GSample;
-use crate::gpu::FrameUniform;
 use crate::scene::GpuLight;
 
 /// As `light_at`: irradiance at `p` and the unit direction towards the light.

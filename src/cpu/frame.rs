@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::gpu::FrameUniform;
+use crate::frame::FrameUniform;
 
 /// As `mat_mul`: `m * v` summed in the WGSL's order.
 pub fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> Vec4 {

@@ -1,6 +1,6 @@
 //! CPU reference of `wgsl/pyramid.wgsl`: the rotated-grid depth MIP chain.
 
-use crate::passes::pyramid::PyramidLayout;
+use crate::frame::PyramidLayout;
 
 /// All levels of the pyramid of `depth` (`layout.levels[0]` is `depth` itself), packed at the
 /// layout's offsets.

@@ -7,9 +7,9 @@ use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
+use crate::frame::FrameUniform;
+use crate::frame::RadiosityUniform;
 use crate::gbuffer::GSample;
-use crate::gpu::FrameUniform;
-use crate::passes::radiosity::RadiosityUniform;
 use crate::settings::Boost;
 
 /// boost(rho) of `wgsl/radiosity.wgsl`.

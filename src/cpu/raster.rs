@@ -4,8 +4,8 @@
 use glam::Vec3;
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::frame::FrameUniform;
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
-use crate::gpu::FrameUniform;
 
 const SUBPIXEL: i32 = 256;
 const SMALL_EXTENT: i32 = 16;

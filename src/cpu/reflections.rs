@@ -4,9 +4,9 @@ use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::environment::Environment;
+use crate::frame::FrameUniform;
+use crate::frame::ReflectionsUniform;
 use crate::gbuffer::{GSample, VIS_EMPTY};
-use crate::gpu::FrameUniform;
-use crate::passes::reflections::ReflectionsUniform;
 
 const STEPS: u32 = 48;
 const EDGE_FADE: f32 = 0.1;

@@ -3,8 +3,8 @@
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, VIS_EMPTY};
-use crate::gpu::FrameUniform;
 use crate::scene::{Material, Scene, Texture};
 
 fn srgb_to_linear(c: f32) -> f32 {

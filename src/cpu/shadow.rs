@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 
 use crate::cpu::frame::mat_mul;
 use crate::cpu::raster::{RasterInput, double_sided_triangles, raster_layer0};
-use crate::passes::shadow::{ShadowFace, light_faces};
+use crate::frame::{ShadowFace, light_faces};
 use crate::scene::{GpuLight, Scene, SceneInfo};
 
 /// Every shadow-casting light's maps at `resolution`, drawn by the CPU rasterizer.

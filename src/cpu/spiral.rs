@@ -4,7 +4,7 @@ use std::f32::consts::TAU;
 
 use glam::Vec2;
 
-use crate::gpu::FrameUniform;
+use crate::frame::FrameUniform;
 
 const GOLDEN_TURNS: f32 = 0.381_966_01;
 

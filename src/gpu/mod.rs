@@ -1,9 +1,10 @@
 //! GPU helpers: device acquisition (for the command line and tests; the library itself only
-//! borrows a device), shader loading, GPU timestamps and buffer read-back.
+//! borrows a device), shader loading, pipelines whose bindings are reflected from the shaders,
+//! GPU timestamps and buffer read-back.
 
-pub mod frame;
-pub mod preprocess;
-pub mod timestamps;
+mod pipeline;
+pub(crate) mod preprocess;
+mod timestamps;
 
 mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
@@ -13,8 +14,9 @@ use wgpu::util::DeviceExt;
 
 use crate::{Error, Result};
 
-pub use frame::{FRAME_DIAGNOSTICS, FrameUniform};
-pub use timestamps::{PassTiming, Timestamps};
+pub(crate) use pipeline::{Pipelines, Slot, slots};
+pub use timestamps::PassTiming;
+pub use timestamps::Timestamps;
 
 /// The WGSL text of `wgsl/<name>` with `defines`, includes expanded.
 pub fn shader_source(name: &str, defines: &[&str]) -> String {
@@ -27,61 +29,6 @@ pub fn shader_source(name: &str, defines: &[&str]) -> String {
     );
     // build.rs has preprocessed and validated every kernel in every combination of defines.
     preprocess::preprocess(name, source, defines, &lookup).expect("validated by build.rs")
-}
-
-/// Creates a compute pipeline for `entry` of `wgsl/<kernel>.wgsl` with `defines`, its bind group
-/// layout derived from the bindings that entry uses.
-pub fn compute_pipeline(
-    device: &wgpu::Device,
-    kernel: &str,
-    entry: &str,
-    defines: &[&str],
-) -> wgpu::ComputePipeline {
-    compute_pipeline_with(device, kernel, entry, defines, &[])
-}
-
-/// [`compute_pipeline`] with values for the shader's `override` constants.
-pub fn compute_pipeline_with(
-    device: &wgpu::Device,
-    kernel: &str,
-    entry: &str,
-    defines: &[&str],
-    constants: &[(&str, f64)],
-) -> wgpu::ComputePipeline {
-    let label = format!("deep-gbuffer.{kernel}");
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(&label),
-        source: wgpu::ShaderSource::Wgsl(shader_source(&format!("{kernel}.wgsl"), defines).into()),
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(&format!("{label}.{entry}")),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
-        cache: None,
-    })
-}
-
-/// A bind group for group 0 of `pipeline` from `(binding, buffer)` pairs.
-pub fn bind_group(
-    device: &wgpu::Device,
-    label: &str,
-    pipeline: &wgpu::ComputePipeline,
-    entries: &[(u32, &wgpu::Buffer)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = entries
-        .iter()
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    })
 }
 
 /// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes
@@ -101,22 +48,6 @@ pub fn scoped<T>(device: &wgpu::Device, label: &str, f: impl FnOnce() -> Result<
     }
 }
 
-/// Binds `entries` to `pipeline` and dispatches one 8x8 workgroup per 8x8 pixels of `size`
-/// (every per-pixel kernel uses `@workgroup_size(8, 8)`).
-pub fn dispatch_pixels(
-    device: &wgpu::Device,
-    pass: &mut wgpu::ComputePass<'_>,
-    label: &str,
-    pipeline: &wgpu::ComputePipeline,
-    entries: &[(u32, &wgpu::Buffer)],
-    size: (u32, u32),
-) {
-    let group = bind_group(device, label, pipeline, entries);
-    pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, &group, &[]);
-    pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
-}
-
 /// Workgroup counts for `groups` one-dimensional workgroups, folded into y past the 65535 limit.
 pub fn dispatch_size(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, 65535);
@@ -129,6 +60,16 @@ pub fn uniform_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wg
         label: Some(label),
         contents,
         usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// A uniform buffer for one `T`, rewritten with `Queue::write_buffer`.
+pub(crate) fn uniform_buffer_for<T>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: std::mem::size_of::<T>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
     })
 }
 
@@ -198,6 +139,20 @@ pub fn map_read(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<Vec<u8>
     Ok(bytes)
 }
 
+/// What a device must have and what it should have if the adapter offers it, for [`Gpu::new`]
+/// ([`Renderer::requirements`](crate::Renderer::requirements) gives deep-gbuffer's).
+#[derive(Clone, Debug, Default)]
+pub struct Requirements {
+    /// Features the device must have.
+    pub features: wgpu::Features,
+    /// Features requested where the adapter has them.
+    pub optional_features: wgpu::Features,
+    /// Among several adapters, those with all of these are preferred.
+    pub preferred_features: wgpu::Features,
+    /// Limits the device must have (storage buffer sizes are raised to the adapter's).
+    pub limits: wgpu::Limits,
+}
+
 /// Which adapter to open, for [`Gpu::new`].
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
@@ -207,10 +162,9 @@ pub struct GpuOptions {
     pub adapter: Option<String>,
 }
 
-/// An instance, adapter, device and queue opened for deep-gbuffer: a convenience for the command
-/// line, tests and benchmarks. A host engine opens its own device instead, with
-/// [`Renderer::required_features`](crate::Renderer::required_features) and
-/// [`Renderer::required_limits`](crate::Renderer::required_limits).
+/// An instance, adapter, device and queue: a convenience for the command line, tests and
+/// benchmarks. A host engine opens its own device instead, with
+/// [`Renderer::requirements`](crate::Renderer::requirements).
 pub struct Gpu {
     /// The adapter.
     pub adapter: wgpu::Adapter,
@@ -221,8 +175,9 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// Opens the best (or the named) adapter with every optional feature deep-gbuffer can use.
-    pub fn new(options: &GpuOptions) -> Result<Gpu> {
+    /// Opens the best (or the named) adapter with the `requirements`' features and limits and
+    /// every optional feature it has.
+    pub fn new(options: &GpuOptions, requirements: &Requirements) -> Result<Gpu> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
@@ -251,7 +206,7 @@ impl Gpu {
                     let f = a.features();
                     let info = a.get_info();
                     (
-                        f.contains(crate::Renderer::int64_features()),
+                        f.contains(requirements.preferred_features),
                         info.backend == wgpu::Backend::Vulkan
                             || info.backend == wgpu::Backend::Metal
                             || info.backend == wgpu::Backend::Dx12,
@@ -262,22 +217,20 @@ impl Gpu {
                 .expect("not empty"),
         };
         let available = adapter.features();
-        let features = crate::Renderer::required_features()
-            | (available & crate::Renderer::optional_features());
-        let limits = crate::Renderer::required_limits().using_resolution(adapter.limits());
+        let features = requirements.features | (available & requirements.optional_features);
+        let limits = requirements.limits.clone().using_resolution(adapter.limits());
         let mut limits = limits;
         let adapter_limits = adapter.limits();
         limits.max_storage_buffer_binding_size = adapter_limits.max_storage_buffer_binding_size;
         limits.max_buffer_size = adapter_limits.max_buffer_size;
         limits.max_storage_buffers_per_shader_stage =
             adapter_limits.max_storage_buffers_per_shader_stage;
-        if !limits.check_limits(&adapter_limits)
-            || !available.contains(crate::Renderer::required_features())
-        {
+        if !limits.check_limits(&adapter_limits) || !available.contains(requirements.features) {
             return Err(Error::RequestDevice(format!(
-                "adapter `{}` does not meet deep-gbuffer's required limits (at least {} storage buffers per stage)",
+                "adapter `{}` does not meet the required features {:?} and limits (at least {} storage buffers per stage)",
                 adapter.get_info().name,
-                crate::Renderer::required_limits().max_storage_buffers_per_shader_stage
+                requirements.features,
+                requirements.limits.max_storage_buffers_per_shader_stage
             )));
         }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

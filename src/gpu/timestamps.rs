@@ -1,9 +1,7 @@
 //! GPU timestamps around named passes (`raster.layer0`, `resolve`, ...).
 
-use serde::Serialize;
-
 /// The GPU time of one named pass.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PassTiming {
     /// Stable pass name.
     pub name: String,

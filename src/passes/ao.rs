@@ -1,88 +1,104 @@
-//! `wgsl/ao.wgsl`: two-layer ambient obscurance.
+//! `wgsl/ao.wgsl`: two-layer ambient obscurance, with its depth pyramids and blur.
 
-use bytemuck::{Pod, Zeroable};
+use super::blur::Blur;
+use super::pyramid::Pyramid;
+use super::{FrameContext, Recorder, Stage};
+use crate::frame::AoUniform;
+use crate::gpu::{self, slots::ao as slot};
+use crate::plan::PassId;
+use crate::settings::Settings;
 
-use crate::gpu;
-use crate::passes::pyramid::PyramidLayout;
-use crate::settings::{AoSettings, Precision};
-
-/// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct AoUniform {
-    /// World-space radius.
-    pub radius: f32,
-    /// Bias β.
-    pub bias: f32,
-    /// Intensity.
-    pub intensity: f32,
-    /// Taps per pixel.
-    pub samples: u32,
-    /// Pyramid levels.
-    pub levels: u32,
-    /// [`AoSettings::mip_offset`].
-    pub mip_offset: u32,
-    /// Padding.
-    pub _pad: [u32; 2],
-    /// Level offsets in the packed pyramid (up to 8).
-    pub offsets: [[u32; 4]; 2],
-}
-
-const _: () = assert!(std::mem::size_of::<AoUniform>() == 64);
-
-impl AoUniform {
-    /// The constants for `settings` over a pyramid of `layout`.
-    pub fn new(settings: &AoSettings, layout: &PyramidLayout) -> Self {
-        let mut offsets = [[0; 4]; 2];
-        for (i, l) in layout.levels.iter().enumerate().take(8) {
-            offsets[i / 4][i % 4] = l.offset;
-        }
-        AoUniform {
-            radius: settings.radius,
-            bias: settings.bias,
-            intensity: settings.intensity,
-            samples: settings.samples,
-            levels: layout.levels.len().min(8) as u32,
-            mip_offset: settings.mip_offset,
-            _pad: [0; 2],
-            offsets,
-        }
-    }
-}
-
-/// The obscurance kernel for one precision and layer count.
-pub struct AoPass {
-    pipeline: wgpu::ComputePipeline,
+/// The obscurance: depth pyramids of the layers it reads, its constants, raw AV, the blur's
+/// intermediate and blurred AV (f32 per pixel).
+pub(crate) struct AoStage {
     two_layers: bool,
+    pyramid: Pyramid,
+    pyramids: [wgpu::Buffer; 2],
+    uniform: wgpu::Buffer,
+    raw: wgpu::Buffer,
+    scratch: wgpu::Buffer,
+    blurred: wgpu::Buffer,
 }
 
-impl AoPass {
-    /// Builds the pipeline; `two_layers` reads both pyramids.
-    pub fn new(device: &wgpu::Device, precision: Precision, two_layers: bool) -> Self {
-        let mut defines = precision.defines();
-        if two_layers {
-            defines.push("TWO_LAYERS");
+impl AoStage {
+    /// The stage for `s`, reading both layers when `two_layers`.
+    pub(crate) fn new(device: &wgpu::Device, s: &Settings, two_layers: bool) -> Self {
+        let pyramid = Pyramid::new(device, s.width, s.height);
+        let buffer =
+            |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
+        let bytes = pyramid.layout().bytes();
+        let pixels = u64::from(s.width) * u64::from(s.height) * 4;
+        AoStage {
+            two_layers,
+            pyramids: [
+                buffer("deep-gbuffer.pyramid.layer0", bytes),
+                buffer("deep-gbuffer.pyramid.layer1", bytes),
+            ],
+            uniform: gpu::uniform_buffer(
+                device,
+                "deep-gbuffer.ao",
+                bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
+            ),
+            raw: buffer("deep-gbuffer.ao.raw", pixels),
+            scratch: buffer("deep-gbuffer.ao.blur", pixels),
+            blurred: buffer("deep-gbuffer.ao.av", pixels),
+            pyramid,
         }
-        AoPass { pipeline: gpu::compute_pipeline(device, "ao", "ao_main", &defines), two_layers }
     }
 
-    /// Records the obscurance of a `width` x `height` frame into `av`.
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        frame: &wgpu::Buffer,
-        uniform: &wgpu::Buffer,
-        gbuffer0: &wgpu::Buffer,
-        pyramids: [&wgpu::Buffer; 2],
-        av: &wgpu::Buffer,
-        size: (u32, u32),
-    ) {
-        let mut entries = vec![(0, frame), (1, uniform), (2, gbuffer0), (3, pyramids[0]), (5, av)];
-        if self.two_layers {
-            entries.push((4, pyramids[1]));
+    /// Whether it reads both layers.
+    pub(crate) fn two_layers(&self) -> bool {
+        self.two_layers
+    }
+
+    /// AV as the composite reads it (blurred unless the blur radius is 0).
+    pub(crate) fn av(&self, s: &Settings) -> &wgpu::Buffer {
+        if s.ao.blur_radius > 0 { &self.blurred } else { &self.raw }
+    }
+
+    /// AV before the blur.
+    pub(crate) fn raw(&self) -> &wgpu::Buffer {
+        &self.raw
+    }
+
+    /// The depth pyramid of `layer`.
+    pub(crate) fn pyramid(&self, layer: usize) -> &wgpu::Buffer {
+        &self.pyramids[layer.min(1)]
+    }
+}
+
+impl Stage for AoStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        let mut pass = rec.pass(id);
+        match id {
+            PassId::Pyramid => {
+                let layers = 1 + usize::from(self.two_layers);
+                for layer in 0..layers {
+                    let (gbuffer, target) = (ctx.gbuffer[layer], &self.pyramids[layer]);
+                    self.pyramid.record(ctx, &mut pass, gbuffer, target);
+                }
+            }
+            PassId::Ao => {
+                let mut defines = ctx.settings.precision.defines();
+                if self.two_layers {
+                    defines.push("TWO_LAYERS");
+                }
+                let pipeline = ctx.pipelines.get(ctx.device, "ao", "ao_main", &defines, &[]);
+                let entries = [
+                    (slot::FRAME, ctx.frame),
+                    (slot::AO, &self.uniform),
+                    (slot::GBUFFER, ctx.gbuffer[0]),
+                    (slot::PYRAMID0, &self.pyramids[0]),
+                    (slot::PYRAMID1, &self.pyramids[1]),
+                    (slot::AV, &self.raw),
+                ];
+                pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+            }
+            PassId::AoBlur => {
+                let blur = Blur { radius: ctx.settings.ao.blur_radius, vec4: false };
+                blur.record(ctx, &mut pass, [&self.raw, &self.scratch, &self.blurred]);
+            }
+            other => unreachable!("{other} is not an obscurance pass"),
         }
-        gpu::dispatch_pixels(device, pass, "deep-gbuffer.ao", &self.pipeline, &entries, size);
     }
 }

@@ -2,7 +2,7 @@
 //! rasterizer with (layer 0 only: depth test and triangle id, no second layer).
 
 use crate::SceneBuffers;
-use crate::gpu;
+use crate::gpu::{self, slots::baseline as slot};
 
 /// A render pipeline and its targets.
 pub struct BaselinePass {
@@ -90,9 +90,18 @@ impl BaselinePass {
             label: Some("deep-gbuffer.baseline"),
             layout: &self.pipeline.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: b.positions.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: b.indices.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: slot::FRAME.binding,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: slot::POSITIONS.binding,
+                    resource: b.positions.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: slot::INDICES.binding,
+                    resource: b.indices.as_entire_binding(),
+                },
             ],
         });
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

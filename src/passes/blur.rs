@@ -1,51 +1,42 @@
 //! `wgsl/blur.wgsl`: the separable bilateral blur (horizontal, then vertical).
 
-use crate::gpu;
-use crate::settings::Precision;
+use super::FrameContext;
+use crate::gpu::slots::blur as slot;
 
-/// Both directions of the blur with one radius.
-pub struct BlurPass {
-    pipelines: [wgpu::ComputePipeline; 2],
+/// One blur: its radius in pixels (a pipeline constant) and whether it blurs `vec4<f32>`
+/// images (radiosity) or f32 images (obscurance).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Blur {
+    pub radius: u32,
+    pub vec4: bool,
 }
 
-impl BlurPass {
-    /// Builds the pipelines for `precision` G-buffers and a blur `radius` in pixels, for f32
-    /// images or (`vec4`) `vec4<f32>` images.
-    pub fn new(device: &wgpu::Device, precision: Precision, radius: u32, vec4: bool) -> Self {
-        let mut packed = precision.defines();
-        if vec4 {
-            packed.push("VEC4");
-        }
-        let packed = &packed[..];
-        let mut vertical = packed.to_vec();
-        vertical.push("VERTICAL");
-        let radius = [("RADIUS", f64::from(radius))];
-        BlurPass {
-            pipelines: [
-                gpu::compute_pipeline_with(device, "blur", "blur_main", packed, &radius),
-                gpu::compute_pipeline_with(device, "blur", "blur_main", &vertical, &radius),
-            ],
-        }
-    }
-
-    /// Records `source` -> `scratch` (horizontal) -> `target` (vertical).
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
+impl Blur {
+    /// Records `source` -> `scratch` (horizontal) -> `target` (vertical), weighted by layer 0.
+    pub(crate) fn record(
         &self,
-        device: &wgpu::Device,
+        ctx: &FrameContext<'_>,
         pass: &mut wgpu::ComputePass<'_>,
-        frame: &wgpu::Buffer,
-        gbuffer0: &wgpu::Buffer,
-        source: &wgpu::Buffer,
-        scratch: &wgpu::Buffer,
-        target: &wgpu::Buffer,
-        size: (u32, u32),
+        [source, scratch, target]: [&wgpu::Buffer; 3],
     ) {
-        for (pipeline, (from, to)) in
-            self.pipelines.iter().zip([(source, scratch), (scratch, target)])
-        {
-            let entries = [(0, frame), (2, gbuffer0), (3, from), (4, to)];
-            gpu::dispatch_pixels(device, pass, "deep-gbuffer.blur", pipeline, &entries, size);
+        let mut defines = ctx.settings.precision.defines();
+        if self.vec4 {
+            defines.push("VEC4");
+        }
+        let radius = [("RADIUS", f64::from(self.radius))];
+        for (vertical, (from, to)) in [(false, (source, scratch)), (true, (scratch, target))] {
+            let mut defines = defines.clone();
+            if vertical {
+                defines.push("VERTICAL");
+            }
+            let pipeline = ctx.pipelines.get(ctx.device, "blur", "blur_main", &defines, &radius);
+            let entries = [
+                (slot::FRAME, ctx.frame),
+                (slot::GBUFFER, ctx.gbuffer[0]),
+                (slot::SOURCE, from),
+                (slot::BLURRED, to),
+            ];
+            pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
         }
     }
 }

@@ -1,81 +1,67 @@
 //! `wgsl/composite.wgsl`: the terms summed into the HDR image.
 
-use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
+use super::{FrameContext, Recorder, Stage};
+use crate::SceneBuffers;
+use crate::frame::CompositeUniform;
+use crate::gpu::{self, slots::composite as slot};
+use crate::plan::PassId;
 
-use crate::gpu;
-use crate::settings::Precision;
-
-/// Mirrors `struct Composite` in `wgsl/composite.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct CompositeUniform {
-    ambient: [f32; 3],
-    _pad: u32,
+/// The HDR image (`vec4<f32>` per pixel) and the composite's constants.
+pub(crate) struct CompositeStage {
+    uniform: wgpu::Buffer,
+    hdr: wgpu::Buffer,
 }
 
-/// The composite kernel, with and without AV and radiosity inputs.
-pub struct CompositePass {
-    /// Indexed by `ao + 2 radiosity + 4 reflections`.
-    pipelines: [wgpu::ComputePipeline; 8],
-}
-
-impl CompositePass {
-    /// Builds the pipelines.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let pipelines = [0usize, 1, 2, 3, 4, 5, 6, 7].map(|variant| {
-            let mut defines = precision.defines();
-            if variant & 1 != 0 {
-                defines.push("AO");
-            }
-            if variant & 2 != 0 {
-                defines.push("RADIOSITY");
-            }
-            if variant & 4 != 0 {
-                defines.push("REFLECTIONS");
-            }
-            gpu::compute_pipeline(device, "composite", "composite_main", &defines)
-        });
-        CompositePass { pipelines }
+impl CompositeStage {
+    /// The image of a `pixels`-pixel frame.
+    pub(crate) fn new(device: &wgpu::Device, pixels: u64) -> Self {
+        CompositeStage {
+            uniform: gpu::uniform_buffer_for::<CompositeUniform>(device, "deep-gbuffer.composite"),
+            hdr: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.composite.hdr",
+                pixels * 16,
+                wgpu::BufferUsages::empty(),
+            ),
+        }
     }
 
-    /// Records the composite into `hdr` (`vec4<f32>` per pixel).
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        frame: &wgpu::Buffer,
-        ambient: glam::Vec3,
-        gbuffer: &wgpu::Buffer,
-        direct: &wgpu::Buffer,
-        av: Option<&wgpu::Buffer>,
-        radiosity: Option<&wgpu::Buffer>,
-        reflections: Option<&wgpu::Buffer>,
-        hdr: &wgpu::Buffer,
-        size: (u32, u32),
-    ) {
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("deep-gbuffer.composite"),
-            contents: bytemuck::bytes_of(&CompositeUniform {
-                ambient: ambient.to_array(),
-                _pad: 0,
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let mut entries = vec![(0, frame), (1, &uniform), (2, gbuffer), (3, direct), (5, hdr)];
-        if let Some(av) = av {
-            entries.push((4, av));
+    /// Writes the frame's constants.
+    pub(crate) fn prepare(&self, queue: &wgpu::Queue, scene: &SceneBuffers) {
+        let uniform = CompositeUniform { ambient: scene.info().ambient.to_array(), _pad: 0 };
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+    }
+
+    /// The HDR image.
+    pub(crate) fn hdr(&self) -> &wgpu::Buffer {
+        &self.hdr
+    }
+}
+
+impl Stage for CompositeStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        debug_assert_eq!(*id, PassId::Composite);
+        let mut pass = rec.pass(id);
+        let mut defines = ctx.settings.precision.defines();
+        let mut entries = vec![
+            (slot::FRAME, ctx.frame),
+            (slot::COMPOSITE, &self.uniform),
+            (slot::GBUFFER, ctx.gbuffer[0]),
+            (slot::DIRECT, ctx.direct[0]),
+            (slot::HDR, &self.hdr),
+        ];
+        let terms = [
+            ("AO", slot::AV, ctx.av),
+            ("RADIOSITY", slot::RADIOSITY, ctx.irradiance),
+            ("REFLECTIONS", slot::REFLECTIONS, ctx.reflections),
+        ];
+        for (define, s, buffer) in terms {
+            if let Some(buffer) = buffer {
+                defines.push(define);
+                entries.push((s, buffer));
+            }
         }
-        if let Some(radiosity) = radiosity {
-            entries.push((6, radiosity));
-        }
-        if let Some(reflections) = reflections {
-            entries.push((7, reflections));
-        }
-        let pipeline = &self.pipelines[usize::from(av.is_some())
-            + 2 * usize::from(radiosity.is_some())
-            + 4 * usize::from(reflections.is_some())];
-        gpu::dispatch_pixels(device, pass, "deep-gbuffer.composite", pipeline, &entries, size);
+        let pipeline = ctx.pipelines.get(ctx.device, "composite", "composite_main", &defines, &[]);
+        pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
     }
 }

@@ -1,77 +1,101 @@
-//! `wgsl/direct.wgsl`: deferred direct lighting of layer 0, with or without shadow maps.
+//! `wgsl/direct.wgsl`: deferred direct light, with or without shadow maps, of layer 0 and of
+//! layer 1 where a later pass reads it.
 
-use bytemuck::{Pod, Zeroable};
-
+use super::{FrameContext, Recorder, Stage};
 use crate::SceneBuffers;
-use crate::gpu;
-use crate::settings::Precision;
-
-/// Mirrors `struct Direct` in `wgsl/direct.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct DirectUniform {
-    light_count: u32,
-    pcf: u32,
-    _pad: [u32; 2],
-}
+use crate::frame::DirectUniform;
+use crate::gpu::{self, slots::direct as slot};
+use crate::plan::{Effect, PassId, Plan};
+use crate::settings::Settings;
 
 /// The shadow inputs of the direct kernel.
-pub struct ShadowInputs<'a> {
+#[derive(Clone, Copy)]
+pub(crate) struct ShadowInputs<'a> {
     /// `ShadowFace` per face.
     pub faces: &'a wgpu::Buffer,
     /// `(first face, face count)` per light.
     pub light_faces: &'a wgpu::Buffer,
     /// Every face's visibility words.
     pub atlas: &'a wgpu::Buffer,
-    /// Percentage-closer filtering radius.
-    pub pcf: u32,
 }
 
-/// The direct-light kernel, without and with shadows.
-pub struct DirectPass {
-    pipelines: [wgpu::ComputePipeline; 2],
+/// Direct radiance of both layers (`vec4<f32>` per pixel) and the kernel's constants.
+pub(crate) struct DirectStage {
+    uniform: wgpu::Buffer,
+    radiance: [wgpu::Buffer; 2],
 }
 
-impl DirectPass {
-    /// Builds the pipelines for `precision` G-buffers.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let packed = &precision.defines()[..];
-        let mut shadows = packed.to_vec();
-        shadows.push("SHADOWS");
-        DirectPass {
-            pipelines: [
-                gpu::compute_pipeline(device, "direct", "direct_main", packed),
-                gpu::compute_pipeline(device, "direct", "direct_main", &shadows),
+impl DirectStage {
+    /// Targets for a `pixels`-pixel image.
+    pub(crate) fn new(device: &wgpu::Device, pixels: u64) -> Self {
+        let buffer =
+            |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
+        DirectStage {
+            uniform: gpu::uniform_buffer_for::<DirectUniform>(device, "deep-gbuffer.direct"),
+            radiance: [
+                buffer("deep-gbuffer.direct.radiance"),
+                buffer("deep-gbuffer.direct.radiance1"),
             ],
         }
     }
 
-    /// Records the direct radiance of `gbuffer` into `radiance` (`vec4<f32>` per pixel).
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
+    /// Writes the frame's constants.
+    pub(crate) fn prepare(
         &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        frame: &wgpu::Buffer,
+        queue: &wgpu::Queue,
         scene: &SceneBuffers,
-        gbuffer: &wgpu::Buffer,
-        radiance: &wgpu::Buffer,
-        shadows: Option<ShadowInputs<'_>>,
-        size: (u32, u32),
+        s: &Settings,
+        plan: &Plan,
     ) {
+        let pcf = if plan.runs(Effect::Shadows) { s.shadows.pcf } else { 0 };
         let light_count = scene.info().lights.len() as u32;
-        let pcf = shadows.as_ref().map_or(0, |s| s.pcf);
-        let uniform = gpu::uniform_buffer(
-            device,
-            "deep-gbuffer.direct",
-            bytemuck::bytes_of(&DirectUniform { light_count, pcf, _pad: [0; 2] }),
-        );
-        let pipeline = &self.pipelines[usize::from(shadows.is_some())];
-        let mut entries =
-            vec![(0, frame), (1, &uniform), (2, gbuffer), (3, scene.light_buffer()), (4, radiance)];
-        if let Some(s) = &shadows {
-            entries.extend([(5, s.faces), (6, s.light_faces), (7, s.atlas)]);
+        let uniform = DirectUniform { light_count, pcf, _pad: [0; 2] };
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+    }
+
+    /// The direct radiance of `layer` (zero where no light runs).
+    pub(crate) fn radiance(&self, layer: usize) -> &wgpu::Buffer {
+        &self.radiance[layer.min(1)]
+    }
+}
+
+impl Stage for DirectStage {
+    fn begin(&self, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        if !ctx.plan.runs(Effect::Direct) {
+            for radiance in &self.radiance {
+                rec.encoder().clear_buffer(radiance, 0, None);
+            }
         }
-        gpu::dispatch_pixels(device, pass, "deep-gbuffer.direct", pipeline, &entries, size);
+    }
+
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        debug_assert_eq!(*id, PassId::Direct);
+        let mut pass = rec.pass(id);
+        let mut defines = ctx.settings.precision.defines();
+        if ctx.shadows.is_some() {
+            defines.push("SHADOWS");
+        }
+        let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
+        // Layer 1's direct light feeds the radiosity and the reflections only.
+        let plan = ctx.plan;
+        let layers =
+            if plan.runs(Effect::Radiosity) || plan.runs(Effect::Reflections) { 2 } else { 1 };
+        for layer in 0..layers {
+            let mut entries = vec![
+                (slot::FRAME, ctx.frame),
+                (slot::DIRECT, &self.uniform),
+                (slot::GBUFFER, ctx.gbuffer[layer]),
+                (slot::LIGHTS, ctx.scene.light_buffer()),
+                (slot::RADIANCE, &self.radiance[layer]),
+            ];
+            if let Some(s) = &ctx.shadows {
+                entries.extend([
+                    (slot::FACES, s.faces),
+                    (slot::LIGHT_FACES, s.light_faces),
+                    (slot::ATLAS, s.atlas),
+                ]);
+            }
+            pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+        }
     }
 }

@@ -1,51 +1,37 @@
 //! `wgsl/fill.wgsl`: fills u32 buffers with a value (empties visibility buffers).
 
-use bytemuck::{Pod, Zeroable};
+use crate::frame::FillParams;
+use crate::gpu::{self, Pipelines, slots::fill as slot};
 
-use crate::gpu;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct FillParams {
-    value: u32,
+/// A fill of every buffer of one size with one value: the uniform that says so.
+pub(crate) struct Fill {
+    uniform: wgpu::Buffer,
     count: u32,
-    _pad: [u32; 2],
 }
 
-/// The fill kernel.
-pub struct FillPass {
-    pipeline: wgpu::ComputePipeline,
-}
-
-impl FillPass {
-    /// Builds the pipeline.
-    pub fn new(device: &wgpu::Device) -> Self {
-        FillPass { pipeline: gpu::compute_pipeline(device, "fill", "fill", &[]) }
-    }
-
-    /// Records a fill of all of `buffer` with `value`.
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        buffer: &wgpu::Buffer,
-        value: u32,
-    ) {
-        let count = (buffer.size() / 4) as u32;
-        let params = gpu::uniform_buffer(
+impl Fill {
+    /// The fill of buffers of `bytes` bytes with `value`.
+    pub(crate) fn new(device: &wgpu::Device, bytes: u64, value: u32) -> Self {
+        let count = (bytes / 4) as u32;
+        let uniform = gpu::uniform_buffer(
             device,
             "deep-gbuffer.fill.params",
             bytemuck::bytes_of(&FillParams { value, count, _pad: [0; 2] }),
         );
-        let group = gpu::bind_group(
-            device,
-            "deep-gbuffer.fill",
-            &self.pipeline,
-            &[(0, &params), (1, buffer)],
-        );
-        let (x, y) = gpu::dispatch_size(count.div_ceil(256));
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        Fill { uniform, count }
+    }
+
+    /// Records the fill of `buffer` (of the size this fill was made for).
+    pub(crate) fn record(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &Pipelines,
+        pass: &mut wgpu::ComputePass<'_>,
+        buffer: &wgpu::Buffer,
+    ) {
+        debug_assert_eq!(buffer.size() / 4, u64::from(self.count), "a fill of another size");
+        let pipeline = pipelines.get(device, "fill", "fill", &[], &[]);
+        let entries = [(slot::PARAMS, &self.uniform), (slot::DATA, buffer)];
+        pipeline.dispatch(device, pass, &entries, gpu::dispatch_size(self.count.div_ceil(256)));
     }
 }

@@ -1,15 +1,120 @@
-//! One module per kernel: its pipelines, bindings and `encode`.
+//! The GPU side of each kernel.
+//!
+//! A *stage* owns the pipelines, buffers, uniforms and bind groups of one part of the frame and
+//! records the [passes](crate::plan::PassId) it owns from a [`FrameContext`]: what the frame
+//! reads (scene, settings, plan) and what the stages before it wrote. The renderer prepares
+//! every stage the plan needs, then walks the plan and hands each pass to its stage.
+//!
+//! `blur`, `fill`, `present` and `pyramid` are kernels that stages share (the obscurance and the
+//! radiosity both blur; the raster and the shadow maps both fill).
 
-pub mod ao;
-pub mod baseline;
-pub mod blur;
-pub mod composite;
-pub mod direct;
-pub mod fill;
-pub mod present;
-pub mod pyramid;
-pub mod radiosity;
-pub mod raster;
-pub mod reflections;
-pub mod resolve;
-pub mod shadow;
+pub(crate) mod ao;
+pub(crate) mod baseline;
+pub(crate) mod blur;
+pub(crate) mod composite;
+pub(crate) mod direct;
+pub(crate) mod fill;
+pub(crate) mod present;
+pub(crate) mod pyramid;
+pub(crate) mod radiosity;
+pub(crate) mod raster;
+pub(crate) mod reflections;
+pub(crate) mod resolve;
+pub(crate) mod shadow;
+
+use crate::SceneBuffers;
+use crate::gpu::{Pipelines, Timestamps};
+use crate::plan::{PassId, Plan};
+use crate::settings::Settings;
+
+/// Records a frame's passes into the caller's encoder, each in a compute pass of its own, named
+/// by its [`PassId`] and timed when timestamps are on.
+pub(crate) struct Recorder<'a> {
+    encoder: &'a mut wgpu::CommandEncoder,
+    timestamps: Option<&'a mut Timestamps>,
+    recorded: Vec<PassId>,
+}
+
+impl<'a> Recorder<'a> {
+    pub(crate) fn new(
+        encoder: &'a mut wgpu::CommandEncoder,
+        mut timestamps: Option<&'a mut Timestamps>,
+    ) -> Self {
+        if let Some(t) = timestamps.as_deref_mut() {
+            t.reset();
+        }
+        Recorder { encoder, timestamps, recorded: Vec::new() }
+    }
+
+    /// Begins the compute pass of `id` (end it by dropping it before the next call).
+    pub(crate) fn pass(&mut self, id: &PassId) -> wgpu::ComputePass<'static> {
+        self.recorded.push(id.clone());
+        let name = id.name();
+        let label = format!("deep-gbuffer.{name}");
+        let timestamp_writes = self.timestamps.as_deref_mut().and_then(|t| t.pass(&name));
+        self.encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&label),
+                timestamp_writes,
+            })
+            .forget_lifetime()
+    }
+
+    /// The encoder, for copies and clears between passes.
+    pub(crate) fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        self.encoder
+    }
+
+    /// Resolves the timestamps and returns the passes recorded, in order.
+    pub(crate) fn finish(self) -> Vec<PassId> {
+        if let Some(t) = &self.timestamps {
+            t.resolve(self.encoder);
+        }
+        self.recorded
+    }
+}
+
+/// What the frame's stages read: the frame's inputs, and the targets the stages before wrote.
+pub(crate) struct FrameContext<'a> {
+    pub device: &'a wgpu::Device,
+    pub pipelines: &'a Pipelines,
+    pub scene: &'a SceneBuffers,
+    pub settings: &'a Settings,
+    pub plan: &'a Plan,
+    /// The frame uniform ([`FrameUniform`](crate::frame::FrameUniform)).
+    pub frame: &'a wgpu::Buffer,
+    /// The rasterizer and its visibility buffers (the shadow maps draw with it too).
+    pub raster: &'a raster::RasterStage,
+    /// The G-buffer layers.
+    pub gbuffer: [&'a wgpu::Buffer; 2],
+    /// The shadow maps, when the plan draws them.
+    pub shadows: Option<direct::ShadowInputs<'a>>,
+    /// Direct radiance of each layer.
+    pub direct: [&'a wgpu::Buffer; 2],
+    /// The ambient visibility the composite reads, when obscurance runs.
+    pub av: Option<&'a wgpu::Buffer>,
+    /// Outgoing radiance B of each layer, when radiosity runs.
+    pub outgoing: Option<[&'a wgpu::Buffer; 2]>,
+    /// The irradiance the composite reads, when radiosity runs.
+    pub irradiance: Option<&'a wgpu::Buffer>,
+    /// The reflected radiance, when reflections run.
+    pub reflections: Option<&'a wgpu::Buffer>,
+    /// The environment map missed reflection rays see, when one is set.
+    pub environment: Option<&'a wgpu::Buffer>,
+}
+
+impl FrameContext<'_> {
+    /// The image size.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+}
+
+/// One part of the frame: records the passes it owns.
+pub(crate) trait Stage {
+    /// Records work outside any pass that the frame needs before its passes (clears).
+    fn begin(&self, _ctx: &FrameContext<'_>, _rec: &mut Recorder<'_>) {}
+
+    /// Records `pass`, one of the stage's own.
+    fn record(&self, pass: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>);
+}

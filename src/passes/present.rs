@@ -1,50 +1,47 @@
 //! `wgsl/present.wgsl`: the HDR composite into a caller's storage texture.
 
-use crate::gpu;
+use crate::gpu::{Pipelines, slots::present as slot};
 
-/// The present kernel for rgba32float and rgba16float targets.
-pub struct PresentPass {
-    pipelines: [wgpu::ComputePipeline; 2],
+/// The caller's texture last presented to, and its view (kept while the texture is the same,
+/// so its bind group is too).
+pub(crate) struct Present {
+    target: Option<(wgpu::Texture, wgpu::TextureView)>,
 }
 
-impl PresentPass {
-    /// Builds both pipelines.
-    pub fn new(device: &wgpu::Device) -> Self {
-        PresentPass {
-            pipelines: [
-                gpu::compute_pipeline(device, "present", "present_main", &[]),
-                gpu::compute_pipeline(device, "present", "present_main", &["F16"]),
-            ],
-        }
+impl Present {
+    pub(crate) fn new() -> Self {
+        Present { target: None }
     }
 
-    /// Records the copy of `hdr` into `view` (of an rgba16float texture when `f16`).
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
-        &self,
+    /// Records the copy of `hdr` into `texture` (rgba16float or rgba32float, the frame's size).
+    #[expect(clippy::too_many_arguments, reason = "the device, the pass, and what it copies")]
+    pub(crate) fn record(
+        &mut self,
         device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
+        pipelines: &Pipelines,
+        encoder: &mut wgpu::CommandEncoder,
         frame: &wgpu::Buffer,
         hdr: &wgpu::Buffer,
-        view: &wgpu::TextureView,
-        f16: bool,
+        texture: &wgpu::Texture,
         size: (u32, u32),
     ) {
-        let pipeline = &self.pipelines[usize::from(f16)];
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        if self.target.as_ref().is_none_or(|(t, _)| t != texture) {
+            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            self.target = Some((texture.clone(), view));
+        }
+        let (_, view) = self.target.as_ref().expect("set above");
+        let f16 = texture.format() == wgpu::TextureFormat::Rgba16Float;
+        let defines: &[&str] = if f16 { &["F16"] } else { &[] };
+        let pipeline = pipelines.get(device, "present", "present_main", defines, &[]);
+        let group = pipeline.bind_with_view(
+            device,
+            &[(slot::FRAME, frame), (slot::HDR, hdr)],
+            (slot::OUTPUT, view),
+        );
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("deep-gbuffer.present"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: hdr.as_entire_binding() },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(view),
-                },
-            ],
+            timestamp_writes: None,
         });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        pipeline.dispatch_group(&mut pass, &group, (size.0.div_ceil(8), size.1.div_ceil(8)));
     }
 }

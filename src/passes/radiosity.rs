@@ -1,160 +1,131 @@
 //! `wgsl/radiosity.wgsl`: screen-space radiosity with temporal multi-bounce.
 
-use bytemuck::{Pod, Zeroable};
+use super::blur::Blur;
+use super::{FrameContext, Recorder, Stage};
+use crate::frame::RadiosityUniform;
+use crate::gpu::{self, slots::radiosity as slot};
+use crate::plan::PassId;
+use crate::settings::Settings;
 
-use crate::gpu;
-use crate::settings::{Normalization, Precision, RadiositySettings};
-
-/// Mirrors `struct Radiosity` in `wgsl/radiosity.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct RadiosityUniform {
-    /// World-space gather radius.
-    pub radius: f32,
-    /// Taps per pixel.
-    pub samples: u32,
-    /// Damping delta of the fed-back indirect light.
-    pub damping: f32,
-    /// Weight of the history in the temporal filter.
-    pub alpha: f32,
-    /// History kept where the reprojected point is within this view depth of the previous layer 0.
-    pub tolerance: f32,
-    /// 1: a tap counts only if it faces the gathering point.
-    pub normal_test: u32,
-    /// 1: the previous frame's history may be used.
-    pub history: u32,
-    /// Frame count since the history began (turns the spiral).
-    pub turn: u32,
-    /// 0: [`Normalization::Cosine`], 1: [`Normalization::Paper`].
-    pub normalization: u32,
-    /// [`Boost::unsaturated`](crate::settings::Boost).
-    pub boost_unsaturated: f32,
-    /// [`Boost::saturated`](crate::settings::Boost).
-    pub boost_saturated: f32,
-    /// Padding to 16 bytes.
-    pub pad: u32,
+/// The radiosity's buffers, all `vec4<f32>` per pixel, as
+/// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them.
+#[derive(Clone, Copy, Debug)]
+pub struct RadiosityBuffers<'a> {
+    /// Outgoing radiance B of layer 0 and layer 1 (direct + emission + damped indirect light).
+    pub outgoing: [&'a wgpu::Buffer; 2],
+    /// The gather's irradiance (rgb) and confidence (a).
+    pub gathered: &'a wgpu::Buffer,
+    /// The temporally filtered irradiance and confidence.
+    pub filtered: &'a wgpu::Buffer,
+    /// The irradiance and confidence the composite reads (blurred unless the radius is 0).
+    pub irradiance: &'a wgpu::Buffer,
 }
 
-impl RadiosityUniform {
-    /// The constants for `s`; `history` tells whether the previous frame may be used, `turn` the
-    /// frame count since the history began.
-    pub fn new(s: &RadiositySettings, history: bool, turn: u32) -> Self {
-        RadiosityUniform {
-            radius: s.radius,
-            samples: s.samples,
-            damping: s.damping,
-            alpha: s.alpha,
-            tolerance: s.history_tolerance,
-            normal_test: u32::from(s.normal_test),
-            history: u32::from(history),
-            turn,
-            normalization: match s.normalization {
-                Normalization::Cosine => 0,
-                Normalization::Paper => 1,
-            },
-            boost_unsaturated: s.boost.unsaturated,
-            boost_saturated: s.boost.saturated,
-            pad: 0,
+impl<'a> RadiosityBuffers<'a> {
+    /// Every buffer with its name: `b0`, `b1`, `gathered`, `filtered`, `irradiance`.
+    pub fn named(&self) -> [(&'static str, &'a wgpu::Buffer); 5] {
+        [
+            ("b0", self.outgoing[0]),
+            ("b1", self.outgoing[1]),
+            ("gathered", self.gathered),
+            ("filtered", self.filtered),
+            ("irradiance", self.irradiance),
+        ]
+    }
+}
+
+/// The radiosity: its constants, B of both layers, the gathered irradiance, the filtered
+/// irradiance of the last and this frame (ping-pong), and the blur's intermediate and result.
+pub(crate) struct RadiosityStage {
+    uniform: wgpu::Buffer,
+    outgoing: [wgpu::Buffer; 2],
+    gathered: wgpu::Buffer,
+    history: [wgpu::Buffer; 2],
+    /// Which `history` this (or, between frames, the last) frame filters into.
+    current: usize,
+    /// Frames since the history began.
+    turn: u32,
+    scratch: wgpu::Buffer,
+    blurred: wgpu::Buffer,
+}
+
+impl RadiosityStage {
+    /// Targets for `s`'s image size.
+    pub(crate) fn new(device: &wgpu::Device, s: &Settings) -> Self {
+        let pixels = u64::from(s.width) * u64::from(s.height);
+        let buffer =
+            |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
+        RadiosityStage {
+            uniform: gpu::uniform_buffer_for::<RadiosityUniform>(device, "deep-gbuffer.radiosity"),
+            outgoing: [buffer("deep-gbuffer.radiosity.b0"), buffer("deep-gbuffer.radiosity.b1")],
+            gathered: buffer("deep-gbuffer.radiosity.raw"),
+            history: [
+                buffer("deep-gbuffer.radiosity.history.a"),
+                buffer("deep-gbuffer.radiosity.history.b"),
+            ],
+            current: 0,
+            turn: 0,
+            scratch: buffer("deep-gbuffer.radiosity.blur"),
+            blurred: buffer("deep-gbuffer.radiosity.blurred"),
+        }
+    }
+
+    /// Starts a frame: filters into the other history buffer and writes the constants;
+    /// `history` tells whether the last frame's irradiance may be used.
+    pub(crate) fn prepare(&mut self, queue: &wgpu::Queue, s: &Settings, history: bool) {
+        self.current = 1 - self.current;
+        self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
+        let uniform = RadiosityUniform::new(&s.radiosity, history, self.turn);
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+    }
+
+    /// This frame's buffers (the last frame's, between frames).
+    pub(crate) fn buffers(&self, s: &Settings) -> RadiosityBuffers<'_> {
+        let filtered = &self.history[self.current];
+        RadiosityBuffers {
+            outgoing: [&self.outgoing[0], &self.outgoing[1]],
+            gathered: &self.gathered,
+            filtered,
+            irradiance: if s.radiosity.blur_radius > 0 { &self.blurred } else { filtered },
         }
     }
 }
 
-/// The buffers of one radiosity frame.
-pub struct RadiosityTargets<'a> {
-    /// Frame constants.
-    pub frame: &'a wgpu::Buffer,
-    /// [`RadiosityUniform`].
-    pub uniform: &'a wgpu::Buffer,
-    /// G-buffer layers.
-    pub gbuffer: [&'a wgpu::Buffer; 2],
-    /// Direct radiance of each layer.
-    pub direct: [&'a wgpu::Buffer; 2],
-    /// Outgoing radiance B of each layer (written by the feedback step).
-    pub b: [&'a wgpu::Buffer; 2],
-    /// The gather's irradiance and confidence.
-    pub raw: &'a wgpu::Buffer,
-    /// Last frame's filtered irradiance, and this frame's.
-    pub history: [&'a wgpu::Buffer; 2],
-    /// Last frame's layer-0 visibility buffer (depth for the history test).
-    pub prev_vis0: &'a wgpu::Buffer,
-}
-
-/// The three radiosity kernels.
-pub struct RadiosityPass {
-    feedback: wgpu::ComputePipeline,
-    gather: wgpu::ComputePipeline,
-    temporal: wgpu::ComputePipeline,
-}
-
-impl RadiosityPass {
-    /// Builds the pipelines for `precision` G-buffers.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines = &precision.defines()[..];
-        RadiosityPass {
-            feedback: gpu::compute_pipeline(device, "radiosity", "radiosity_feedback", defines),
-            gather: gpu::compute_pipeline(device, "radiosity", "radiosity_gather", defines),
-            temporal: gpu::compute_pipeline(device, "radiosity", "radiosity_temporal", defines),
-        }
-    }
-
-    /// Records feedback and gather (the `radiosity` pass).
-    pub fn encode_gather(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        t: &RadiosityTargets<'_>,
-        size: (u32, u32),
-    ) {
-        let feedback = [
-            (0, t.frame),
-            (1, t.uniform),
-            (2, t.gbuffer[0]),
-            (3, t.gbuffer[1]),
-            (4, t.direct[0]),
-            (5, t.direct[1]),
-            (6, t.b[0]),
-            (7, t.b[1]),
-            (9, t.history[0]),
-            (11, t.prev_vis0),
-        ];
-        let gather = [
-            (0, t.frame),
-            (1, t.uniform),
-            (2, t.gbuffer[0]),
-            (3, t.gbuffer[1]),
-            (6, t.b[0]),
-            (7, t.b[1]),
-            (8, t.raw),
-        ];
-        for (pipeline, entries) in [(&self.feedback, &feedback[..]), (&self.gather, &gather[..])] {
-            gpu::dispatch_pixels(device, pass, "deep-gbuffer.radiosity", pipeline, entries, size);
-        }
-    }
-
-    /// Records the temporal filter (the `radiosity.temporal` pass).
-    pub fn encode_temporal(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        t: &RadiosityTargets<'_>,
-        size: (u32, u32),
-    ) {
+impl Stage for RadiosityStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        let mut pass = rec.pass(id);
+        let (history_in, history_out) =
+            (&self.history[1 - self.current], &self.history[self.current]);
         let entries = [
-            (0, t.frame),
-            (1, t.uniform),
-            (2, t.gbuffer[0]),
-            (8, t.raw),
-            (9, t.history[0]),
-            (10, t.history[1]),
-            (11, t.prev_vis0),
+            (slot::FRAME, ctx.frame),
+            (slot::PARAMS, &self.uniform),
+            (slot::GBUFFER0, ctx.gbuffer[0]),
+            (slot::GBUFFER1, ctx.gbuffer[1]),
+            (slot::DIRECT0, ctx.direct[0]),
+            (slot::DIRECT1, ctx.direct[1]),
+            (slot::B0, &self.outgoing[0]),
+            (slot::B1, &self.outgoing[1]),
+            (slot::RAW, &self.gathered),
+            (slot::HISTORY_IN, history_in),
+            (slot::HISTORY_OUT, history_out),
+            (slot::PREV_VIS0, ctx.raster.previous_vis0()),
         ];
-        gpu::dispatch_pixels(
-            device,
-            pass,
-            "deep-gbuffer.radiosity.temporal",
-            &self.temporal,
-            &entries,
-            size,
-        );
+        let defines = ctx.settings.precision.defines();
+        let run = |pass: &mut wgpu::ComputePass<'_>, entry| {
+            let pipeline = ctx.pipelines.get(ctx.device, "radiosity", entry, &defines, &[]);
+            pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
+        };
+        match id {
+            PassId::Radiosity => {
+                run(&mut pass, "radiosity_feedback");
+                run(&mut pass, "radiosity_gather");
+            }
+            PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal"),
+            PassId::RadiosityBlur => {
+                let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
+                blur.record(ctx, &mut pass, [history_out, &self.scratch, &self.blurred]);
+            }
+            other => unreachable!("{other} is not a radiosity pass"),
+        }
     }
 }

@@ -5,14 +5,17 @@
 //! (indirect, 16x16 tiles). On the 32-bit path every step runs twice: a depth phase, then an id
 //! phase; on the 64-bit path once.
 
-use std::collections::HashMap;
-
+use super::fill::Fill;
+use super::{FrameContext, Recorder, Stage};
 use crate::SceneBuffers;
-use crate::gpu;
+use crate::frame::{FrameUniform, RasterCounters};
+use crate::gpu::{self, Pipelines, slots::raster as slot};
+use crate::plan::PassId;
+use crate::settings::Layer1Variant;
 
 /// What one raster step writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum RasterMode {
+pub(crate) enum RasterMode {
     /// Layer 0 only.
     Layer0,
     /// Layer 1 only, against `zref` (the final layer 0 of this frame).
@@ -27,34 +30,30 @@ pub enum RasterMode {
     Count,
 }
 
-struct Pipelines {
-    small: wgpu::ComputePipeline,
-    args: wgpu::ComputePipeline,
-    /// One per bin (the `BIN` override): few tiles, many tiles.
-    large: [wgpu::ComputePipeline; 2],
+impl RasterMode {
+    fn defines(self) -> Vec<&'static str> {
+        match self {
+            RasterMode::Layer0 => vec!["WRITE_L0"],
+            RasterMode::Layer1 => vec!["WRITE_L1"],
+            RasterMode::Both { reproject: false } => vec!["WRITE_L0", "WRITE_L1"],
+            RasterMode::Both { reproject: true } => vec!["WRITE_L0", "WRITE_L1", "REPROJECT"],
+            RasterMode::Count => vec!["COUNT"],
+        }
+    }
 }
 
-/// Bytes of the bin counters and diagnostics words (12 u32, see `bins` in `wgsl/raster.wgsl`).
-pub const BINS_BYTES: u64 = 48;
 /// Bytes of the indirect arguments (two dispatches of 4 u32).
-pub const ARGS_BYTES: u64 = 32;
+const ARGS_BYTES: u64 = 32;
 
 /// Bytes of the bin entries for `triangles` triangles: two bins, each with room for two
 /// clipped sub-triangles per triangle plus slack, 8 bytes an entry, within `limit`.
-pub fn bin_bytes(triangles: u32, limit: u64) -> u64 {
+fn bin_bytes(triangles: u32, limit: u64) -> u64 {
     ((u64::from(triangles) * 2 + 1024) * 2 * 8).min(limit & !15)
 }
 
-/// The buffers one raster step reads and writes.
-pub struct RasterTargets<'a> {
-    /// The frame uniform.
-    pub frame: &'a wgpu::Buffer,
-    /// Bin counters ([`BINS_BYTES`]).
-    pub bins: &'a wgpu::Buffer,
-    /// The bins' entries ([`bin_bytes`]).
-    pub large: &'a wgpu::Buffer,
-    /// Indirect arguments for `raster_large` ([`ARGS_BYTES`], INDIRECT usage).
-    pub args: &'a wgpu::Buffer,
+/// The buffers one raster step writes, besides the rasterizer's own.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct RasterTargets<'a> {
     /// Layer 0 visibility buffer (Layer0, Both).
     pub vis0: Option<&'a wgpu::Buffer>,
     /// Layer 1 visibility buffer (Layer1, Both).
@@ -65,122 +64,204 @@ pub struct RasterTargets<'a> {
     pub counts: Option<&'a wgpu::Buffer>,
 }
 
-/// The raster kernels, for one atomic path, built on first use per mode.
-pub struct RasterPass {
+/// The rasterizer: its atomic path, bins, counters and indirect arguments.
+pub(crate) struct Rasterizer {
     int64: bool,
-    pipelines: HashMap<(RasterMode, bool), Pipelines>,
+    /// Bin counters and diagnostics ([`RasterCounters`]).
+    bins: wgpu::Buffer,
+    args: wgpu::Buffer,
+    large: wgpu::Buffer,
 }
 
-impl RasterPass {
+impl Rasterizer {
     /// `int64`: use 64-bit atomics (the device must have them).
-    pub fn new(int64: bool) -> Self {
-        RasterPass { int64, pipelines: HashMap::new() }
+    pub(crate) fn new(device: &wgpu::Device, int64: bool) -> Self {
+        let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
+        Rasterizer {
+            int64,
+            bins: storage(
+                "deep-gbuffer.raster.bins",
+                std::mem::size_of::<RasterCounters>() as u64,
+                wgpu::BufferUsages::empty(),
+            ),
+            args: storage("deep-gbuffer.raster.args", ARGS_BYTES, wgpu::BufferUsages::INDIRECT),
+            large: storage("deep-gbuffer.raster.large", 16, wgpu::BufferUsages::empty()),
+        }
     }
 
-    /// Whether this uses the 64-bit atomic path.
-    pub fn int64(&self) -> bool {
-        self.int64
+    /// Makes the bins large enough for `scene`.
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, scene: &SceneBuffers) {
+        let limit = device.limits().max_storage_buffer_binding_size;
+        let needed = bin_bytes(scene.triangle_count(), limit);
+        if self.large.size() < needed {
+            let usage = wgpu::BufferUsages::empty();
+            self.large = gpu::storage_buffer(device, "deep-gbuffer.raster.large", needed, usage);
+        }
     }
 
-    fn pipelines(
-        &mut self,
+    /// Records one raster step (both phases on the 32-bit path) drawn with the camera of
+    /// `frame` into `t`.
+    #[expect(clippy::too_many_arguments, reason = "the device, the pass, and what it draws")]
+    pub(crate) fn draw(
+        &self,
         device: &wgpu::Device,
-        mode: RasterMode,
-        depth_phase: bool,
-    ) -> &Pipelines {
-        let int64 = self.int64;
-        self.pipelines.entry((mode, depth_phase)).or_insert_with(|| {
-            let mut defines: Vec<&str> = match mode {
-                RasterMode::Layer0 => vec!["WRITE_L0"],
-                RasterMode::Layer1 => vec!["WRITE_L1"],
-                RasterMode::Both { reproject: false } => vec!["WRITE_L0", "WRITE_L1"],
-                RasterMode::Both { reproject: true } => vec!["WRITE_L0", "WRITE_L1", "REPROJECT"],
-                RasterMode::Count => vec!["COUNT"],
-            };
-            if int64 {
-                defines.push("INT64");
-            } else if depth_phase {
-                defines.push("DEPTH_PHASE");
-            }
-            Pipelines {
-                small: gpu::compute_pipeline(device, "raster", "raster_small", &defines),
-                args: gpu::compute_pipeline(device, "raster", "bin_args", &defines),
-                large: [0.0, 1.0].map(|bin| {
-                    gpu::compute_pipeline_with(
-                        device,
-                        "raster",
-                        "raster_large",
-                        &defines,
-                        &[("BIN", bin)],
-                    )
-                }),
-            }
-        })
-    }
-
-    /// Records one raster step (both phases on the 32-bit path) into `pass`.
-    pub fn encode(
-        &mut self,
-        device: &wgpu::Device,
+        pipelines: &Pipelines,
         pass: &mut wgpu::ComputePass<'_>,
         scene: &SceneBuffers,
+        frame: &wgpu::Buffer,
         mode: RasterMode,
-        t: &RasterTargets<'_>,
+        t: RasterTargets<'_>,
     ) {
         let phases: &[bool] =
             if self.int64 || mode == RasterMode::Count { &[false] } else { &[true, false] };
         let b = scene.buffers();
+        let mut entries = vec![
+            (slot::FRAME, frame),
+            (slot::POSITIONS, &b.positions),
+            (slot::INDICES, &b.indices),
+            (slot::TRI_MATERIALS, &b.triangle_materials),
+            (slot::MATERIALS, &b.materials),
+            (slot::BINS, &self.bins),
+            (slot::LARGE, &self.large),
+            (slot::ARGS, &self.args),
+            (slot::TEXELS, &b.texels),
+        ];
+        let optional = [
+            (slot::VIS0, t.vis0),
+            (slot::VIS1, t.vis1),
+            (slot::ZREF, t.zref),
+            (slot::COUNTS, t.counts),
+        ];
+        entries.extend(optional.into_iter().filter_map(|(s, b)| Some((s, b?))));
+        let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
         for &depth_phase in phases {
-            let p = self.pipelines(device, mode, depth_phase);
-            let mut entries: Vec<(u32, &wgpu::Buffer)> = vec![
-                (0, t.frame),
-                (1, &b.positions),
-                (2, &b.indices),
-                (3, &b.triangle_materials),
-                (4, &b.materials),
-                (5, t.bins),
-                (6, t.large),
-            ];
-            let optional = [(8, t.vis0), (9, t.vis1), (10, t.zref), (11, t.counts)];
-            let wanted: &[u32] = match mode {
-                RasterMode::Layer0 => &[8],
-                RasterMode::Layer1 => &[9, 10],
-                RasterMode::Both { .. } => &[8, 9, 10],
-                RasterMode::Count => &[11],
+            let mut defines = mode.defines();
+            if self.int64 {
+                defines.push("INT64");
+            } else if depth_phase {
+                defines.push("DEPTH_PHASE");
+            }
+            let get = |entry, constants: &[(&'static str, f64)]| {
+                pipelines.get(device, "raster", entry, &defines, constants)
             };
-            for (binding, buffer) in optional {
-                if wanted.contains(&binding) {
-                    entries.push((binding, buffer.expect("the mode's buffers are given")));
-                }
-            }
-            let large = p
-                .large
-                .each_ref()
-                .map(|l| gpu::bind_group(device, "deep-gbuffer.raster.large", l, &entries));
-            if wanted.contains(&8) {
-                // raster_small checks textures against the texel buffer's length.
-                entries.push((12, &b.texels));
-            }
-            let small = gpu::bind_group(device, "deep-gbuffer.raster.small", &p.small, &entries);
-            let args = gpu::bind_group(
-                device,
-                "deep-gbuffer.raster.args",
-                &p.args,
-                &[(5, t.bins), (6, t.large), (7, t.args)],
-            );
-            let (x, y) = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
-            pass.set_pipeline(&p.small);
-            pass.set_bind_group(0, &small, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-            pass.set_pipeline(&p.args);
-            pass.set_bind_group(0, &args, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-            for (offset, (pipeline, group)) in p.large.iter().zip(&large).enumerate() {
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, group, &[]);
-                pass.dispatch_workgroups_indirect(t.args, offset as u64 * 16);
+            get("raster_small", &[]).dispatch(device, pass, &entries, groups);
+            get("bin_args", &[]).dispatch(device, pass, &entries, (1, 1));
+            for bin in [0u32, 1] {
+                get("raster_large", &[("BIN", f64::from(bin))]).dispatch_indirect(
+                    device,
+                    pass,
+                    &entries,
+                    &self.args,
+                    u64::from(bin) * 16,
+                );
             }
         }
+    }
+
+    /// Reads the counters of the frames since the bins were last cleared (waits for the GPU).
+    pub(crate) fn counters(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> crate::Result<RasterCounters> {
+        let bytes = gpu::read_buffer(device, queue, &self.bins)?;
+        Ok(bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<RasterCounters>()]))
+    }
+}
+
+/// The camera's raster: the rasterizer, both layers' visibility buffers, and last frame's layer 0
+/// (which the one-pass layer-1 variants and the radiosity history read).
+pub(crate) struct RasterStage {
+    pub(crate) rasterizer: Rasterizer,
+    vis0: [wgpu::Buffer; 2],
+    vis1: wgpu::Buffer,
+    /// Which `vis0` holds this (or, between frames, the last) frame's layer 0.
+    current: usize,
+    fill: Fill,
+}
+
+impl RasterStage {
+    /// The visibility buffers of a `pixels`-pixel image.
+    pub(crate) fn new(device: &wgpu::Device, int64: bool, pixels: u64) -> Self {
+        let vis =
+            |label| gpu::storage_buffer(device, label, pixels * 8, wgpu::BufferUsages::empty());
+        let vis1 = vis("deep-gbuffer.raster.vis1");
+        RasterStage {
+            rasterizer: Rasterizer::new(device, int64),
+            vis0: [vis("deep-gbuffer.raster.vis0.a"), vis("deep-gbuffer.raster.vis0.b")],
+            fill: Fill::new(device, vis1.size(), u32::MAX),
+            vis1,
+            current: 0,
+        }
+    }
+
+    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer.
+    pub(crate) fn prepare(&mut self, device: &wgpu::Device, scene: &SceneBuffers) {
+        self.rasterizer.reserve(device, scene);
+        self.current = 1 - self.current;
+    }
+
+    /// Whether this uses the 64-bit atomic path.
+    pub(crate) fn int64(&self) -> bool {
+        self.rasterizer.int64
+    }
+
+    /// This frame's layer 0 (the last frame's, between frames).
+    pub(crate) fn vis0(&self) -> &wgpu::Buffer {
+        &self.vis0[self.current]
+    }
+
+    /// The layer 0 of the frame before.
+    pub(crate) fn previous_vis0(&self) -> &wgpu::Buffer {
+        &self.vis0[1 - self.current]
+    }
+
+    /// The layer-0 buffer the next frame will write.
+    pub(crate) fn next_vis0(&self) -> &wgpu::Buffer {
+        self.previous_vis0()
+    }
+
+    /// Layer 1.
+    pub(crate) fn vis1(&self) -> &wgpu::Buffer {
+        &self.vis1
+    }
+}
+
+impl Stage for RasterStage {
+    fn begin(&self, _ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        rec.encoder().clear_buffer(&self.rasterizer.bins, 0, None);
+    }
+
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        let mut pass = rec.pass(id);
+        let (vis0, vis1) = (self.vis0(), &self.vis1);
+        let (mode, t) = match id {
+            PassId::RasterClear => {
+                self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis0);
+                if ctx.plan.layers == 2 {
+                    self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis1);
+                }
+                return;
+            }
+            PassId::RasterLayer0 => {
+                (RasterMode::Layer0, RasterTargets { vis0: Some(vis0), ..Default::default() })
+            }
+            PassId::RasterLayer1 => (
+                RasterMode::Layer1,
+                RasterTargets { vis1: Some(vis1), zref: Some(vis0), ..Default::default() },
+            ),
+            PassId::RasterLayers => (
+                RasterMode::Both { reproject: ctx.settings.layer1 == Layer1Variant::Reproject },
+                RasterTargets {
+                    vis0: Some(vis0),
+                    vis1: Some(vis1),
+                    zref: Some(self.previous_vis0()),
+                    counts: None,
+                },
+            ),
+            other => unreachable!("{other} is not a raster pass"),
+        };
+        self.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, ctx.frame, mode, t);
     }
 }
 
@@ -190,58 +271,32 @@ pub fn coverage_counts(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &SceneBuffers,
-    frame: &crate::gpu::FrameUniform,
+    frame: &FrameUniform,
 ) -> crate::Result<Vec<u32>> {
     let pixels = u64::from(frame.width) * u64::from(frame.height);
     let uniform =
         gpu::uniform_buffer(device, "deep-gbuffer.raster.count.frame", bytemuck::bytes_of(frame));
-    let bins = gpu::storage_buffer(
-        device,
-        "deep-gbuffer.raster.count.bins",
-        BINS_BYTES,
-        wgpu::BufferUsages::empty(),
-    );
-    let args = gpu::storage_buffer(
-        device,
-        "deep-gbuffer.raster.count.args",
-        ARGS_BYTES,
-        wgpu::BufferUsages::INDIRECT,
-    );
-    let large_bytes =
-        bin_bytes(scene.triangle_count(), device.limits().max_storage_buffer_binding_size);
-    let large = gpu::storage_buffer(
-        device,
-        "deep-gbuffer.raster.count.large",
-        large_bytes,
-        wgpu::BufferUsages::empty(),
-    );
+    let mut rasterizer = Rasterizer::new(device, false);
+    rasterizer.reserve(device, scene);
     let counts = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.counts",
         pixels * 4,
         wgpu::BufferUsages::empty(),
     );
+    let pipelines = Pipelines::default();
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("deep-gbuffer.raster.count"),
     });
     encoder.clear_buffer(&counts, 0, None);
-    encoder.clear_buffer(&bins, 0, None);
+    encoder.clear_buffer(&rasterizer.bins, 0, None);
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("deep-gbuffer.raster.count"),
             timestamp_writes: None,
         });
-        let targets = RasterTargets {
-            frame: &uniform,
-            bins: &bins,
-            large: &large,
-            args: &args,
-            vis0: None,
-            vis1: None,
-            zref: None,
-            counts: Some(&counts),
-        };
-        RasterPass::new(false).encode(device, &mut pass, scene, RasterMode::Count, &targets);
+        let targets = RasterTargets { counts: Some(&counts), ..Default::default() };
+        rasterizer.draw(device, &pipelines, &mut pass, scene, &uniform, RasterMode::Count, targets);
     }
     queue.submit([encoder.finish()]);
     let bytes = gpu::read_buffer(device, queue, &counts)?;

@@ -1,116 +1,108 @@
 //! `wgsl/reflections.wgsl`: screen-space reflections against both layers, in reflective tiles
 //! only.
 
-use bytemuck::{Pod, Zeroable};
+use super::{FrameContext, Recorder, Stage};
+use crate::SceneBuffers;
+use crate::frame::ReflectionsUniform;
+use crate::gpu::{self, slots::reflections as slot};
+use crate::plan::PassId;
+use crate::settings::Settings;
 
-use crate::gpu;
-use crate::settings::Precision;
-
-/// Mirrors `struct Reflections` in `wgsl/reflections.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct ReflectionsUniform {
-    /// Environment (sky) radiance a missed ray sees.
-    pub sky: [f32; 3],
-    /// How far a ray is marched, in scene units.
-    pub max_distance: f32,
-    /// How far behind a surface a ray may pass and still hit it, in scene units.
-    pub thickness: f32,
-    /// 8x8 tiles across.
-    pub tiles_x: u32,
-    /// 8x8 tiles down.
-    pub tiles_y: u32,
-    /// Environment map width in texels (0: the constant `sky`).
-    pub env_width: u32,
-    /// Environment map height in texels.
-    pub env_height: u32,
-    /// 1: the layer-0 radiance already includes emission (the radiosity pass's B).
-    pub with_emission: u32,
-    /// Padding.
-    pub _pad: [u32; 2],
+/// The reflections: constants, the reflective tiles and their indirect arguments, and the
+/// reflected radiance (rgb, times the reflectivity) and confidence (a) per pixel.
+pub(crate) struct ReflectionsStage {
+    uniform: wgpu::Buffer,
+    tiles: wgpu::Buffer,
+    args: wgpu::Buffer,
+    output: wgpu::Buffer,
+    /// Bound in place of an environment map when there is none.
+    no_environment: wgpu::Buffer,
+    tiles_x: u32,
+    tiles_y: u32,
 }
 
-/// The inputs and outputs of the reflection passes.
-pub struct ReflectionTargets<'a> {
-    /// Frame constants.
-    pub frame: &'a wgpu::Buffer,
-    /// Layer-0 G-buffer.
-    pub gbuffer0: &'a wgpu::Buffer,
-    /// Layer-1 visibility buffer (its depth words).
-    pub vis1: &'a wgpu::Buffer,
-    /// Outgoing radiance of both layers (B when radiosity runs, else direct).
-    pub radiance: [&'a wgpu::Buffer; 2],
-    /// The environment map's texels (any buffer of at least 16 bytes without one).
-    pub environment: &'a wgpu::Buffer,
-    /// Tile list (count, then tile indices).
-    pub tiles: &'a wgpu::Buffer,
-    /// Indirect arguments (INDIRECT usage).
-    pub args: &'a wgpu::Buffer,
-    /// Reflected radiance (rgb) and confidence (a) per pixel.
-    pub output: &'a wgpu::Buffer,
-}
-
-/// The reflection kernels.
-pub struct ReflectionsPass {
-    classify: wgpu::ComputePipeline,
-    args: wgpu::ComputePipeline,
-    march: wgpu::ComputePipeline,
-}
-
-impl ReflectionsPass {
-    /// Builds the pipelines for `precision` G-buffers.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        let defines = &precision.defines()[..];
-        ReflectionsPass {
-            classify: gpu::compute_pipeline(device, "reflections", "reflections_classify", defines),
-            args: gpu::compute_pipeline(device, "reflections", "reflections_args", defines),
-            march: gpu::compute_pipeline(device, "reflections", "reflections_march", defines),
+impl ReflectionsStage {
+    /// Targets for `s`'s image size.
+    pub(crate) fn new(device: &wgpu::Device, s: &Settings) -> Self {
+        let (tiles_x, tiles_y) = (s.width.div_ceil(8), s.height.div_ceil(8));
+        let pixels = u64::from(s.width) * u64::from(s.height);
+        let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
+        let none = wgpu::BufferUsages::empty();
+        ReflectionsStage {
+            uniform: gpu::uniform_buffer_for::<ReflectionsUniform>(
+                device,
+                "deep-gbuffer.reflections",
+            ),
+            tiles: storage(
+                "deep-gbuffer.reflections.tiles",
+                (u64::from(tiles_x * tiles_y) + 1) * 4,
+                none,
+            ),
+            args: storage("deep-gbuffer.reflections.args", 16, wgpu::BufferUsages::INDIRECT),
+            output: storage("deep-gbuffer.reflections.output", pixels * 16, none),
+            no_environment: storage("deep-gbuffer.reflections.no_environment", 16, none),
+            tiles_x,
+            tiles_y,
         }
     }
 
-    /// Records classify, args and march into `pass` (the tile list must be zeroed before).
-    pub fn encode(
+    /// Writes the frame's constants: `environment` is the map's size (`None`: the scene's
+    /// ambient sky), `with_emission` whether the radiance read is the radiosity's B.
+    pub(crate) fn prepare(
         &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        uniform: &ReflectionsUniform,
-        t: &ReflectionTargets<'_>,
+        queue: &wgpu::Queue,
+        s: &Settings,
+        scene: &SceneBuffers,
+        environment: Option<(u32, u32)>,
+        with_emission: bool,
     ) {
-        let params =
-            gpu::uniform_buffer(device, "deep-gbuffer.reflections", bytemuck::bytes_of(uniform));
-        let classify = gpu::bind_group(
-            device,
-            "deep-gbuffer.reflections.classify",
-            &self.classify,
-            &[(0, t.frame), (1, &params), (2, t.gbuffer0), (6, t.tiles)],
-        );
-        pass.set_pipeline(&self.classify);
-        pass.set_bind_group(0, &classify, &[]);
-        let (x, y) = gpu::dispatch_size((uniform.tiles_x * uniform.tiles_y).div_ceil(64));
-        pass.dispatch_workgroups(x, y, 1);
-        let args = gpu::bind_group(
-            device,
-            "deep-gbuffer.reflections.args",
-            &self.args,
-            &[(6, t.tiles), (7, t.args)],
-        );
-        pass.set_pipeline(&self.args);
-        pass.set_bind_group(0, &args, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        let (env_width, env_height) = environment.unwrap_or((0, 0));
+        let uniform = ReflectionsUniform {
+            sky: scene.info().ambient.to_array(),
+            max_distance: s.reflections.max_distance,
+            thickness: s.reflections.thickness,
+            tiles_x: self.tiles_x,
+            tiles_y: self.tiles_y,
+            env_width,
+            env_height,
+            with_emission: u32::from(with_emission),
+            _pad: [0; 2],
+        };
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+    }
+
+    /// The reflected radiance and confidence.
+    pub(crate) fn output(&self) -> &wgpu::Buffer {
+        &self.output
+    }
+}
+
+impl Stage for ReflectionsStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        debug_assert_eq!(*id, PassId::Reflections);
+        rec.encoder().clear_buffer(&self.tiles, 0, None);
+        rec.encoder().clear_buffer(&self.output, 0, None);
+        let mut pass = rec.pass(id);
+        // The radiosity pass's B is the fuller outgoing radiance (it adds the previous frame's
+        // indirect light to direct and emission).
+        let radiance = ctx.outgoing.unwrap_or(ctx.direct);
         let entries = [
-            (0, t.frame),
-            (1, &params),
-            (2, t.gbuffer0),
-            (3, t.vis1),
-            (4, t.radiance[0]),
-            (5, t.radiance[1]),
-            (6, t.tiles),
-            (8, t.output),
-            (9, t.environment),
+            (slot::FRAME, ctx.frame),
+            (slot::PARAMS, &self.uniform),
+            (slot::GBUFFER, ctx.gbuffer[0]),
+            (slot::GBUFFER1_DEPTH, ctx.raster.vis1()),
+            (slot::RADIANCE0, radiance[0]),
+            (slot::RADIANCE1, radiance[1]),
+            (slot::TILES, &self.tiles),
+            (slot::ARGS, &self.args),
+            (slot::REFLECTIONS, &self.output),
+            (slot::ENVIRONMENT_MAP, ctx.environment.unwrap_or(&self.no_environment)),
         ];
-        let march = gpu::bind_group(device, "deep-gbuffer.reflections", &self.march, &entries);
-        pass.set_pipeline(&self.march);
-        pass.set_bind_group(0, &march, &[]);
-        pass.dispatch_workgroups_indirect(t.args, 0);
+        let defines = ctx.settings.precision.defines();
+        let get = |entry| ctx.pipelines.get(ctx.device, "reflections", entry, &defines, &[]);
+        let groups = gpu::dispatch_size((self.tiles_x * self.tiles_y).div_ceil(64));
+        get("reflections_classify").dispatch(ctx.device, &mut pass, &entries, groups);
+        get("reflections_args").dispatch(ctx.device, &mut pass, &entries, (1, 1));
+        get("reflections_march").dispatch_indirect(ctx.device, &mut pass, &entries, &self.args, 0);
     }
 }

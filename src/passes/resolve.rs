@@ -1,54 +1,51 @@
 //! `wgsl/resolve.wgsl`: visibility buffer to G-buffer layer.
 
-use crate::SceneBuffers;
-use crate::gpu;
-use crate::settings::Precision;
+use super::{FrameContext, Recorder, Stage};
+use crate::gpu::{self, slots::resolve as slot};
+use crate::plan::PassId;
 
-/// The resolve kernel for one G-buffer precision.
-pub struct ResolvePass {
-    pipeline: wgpu::ComputePipeline,
+/// The G-buffer layers and the kernel that fills them from the visibility buffers.
+pub(crate) struct ResolveStage {
+    gbuffer: [wgpu::Buffer; 2],
 }
 
-impl ResolvePass {
-    /// Builds the pipeline.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
-        ResolvePass {
-            pipeline: gpu::compute_pipeline(device, "resolve", "resolve", &precision.defines()),
+impl ResolveStage {
+    /// Two layers of `bytes` bytes each.
+    pub(crate) fn new(device: &wgpu::Device, bytes: u64) -> Self {
+        let g = |label| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+        ResolveStage {
+            gbuffer: [g("deep-gbuffer.resolve.layer0"), g("deep-gbuffer.resolve.layer1")],
         }
     }
 
-    /// Records the resolve of `vis` into `gbuffer` for a `width` x `height` image.
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, named")]
-    pub fn encode(
-        &self,
-        device: &wgpu::Device,
-        pass: &mut wgpu::ComputePass<'_>,
-        scene: &SceneBuffers,
-        frame: &wgpu::Buffer,
-        vis: &wgpu::Buffer,
-        gbuffer: &wgpu::Buffer,
-        width: u32,
-        height: u32,
-    ) {
-        let b = scene.buffers();
-        gpu::dispatch_pixels(
-            device,
-            pass,
-            "deep-gbuffer.resolve",
-            &self.pipeline,
-            &[
-                (0, frame),
-                (1, &b.positions),
-                (2, &b.normals),
-                (3, &b.uvs),
-                (4, &b.indices),
-                (5, &b.triangle_materials),
-                (6, &b.materials),
-                (7, &b.texels),
-                (8, vis),
-                (9, gbuffer),
-            ],
-            (width, height),
-        );
+    /// The G-buffer of `layer` (0 or 1).
+    pub(crate) fn gbuffer(&self, layer: usize) -> &wgpu::Buffer {
+        &self.gbuffer[layer.min(1)]
+    }
+}
+
+impl Stage for ResolveStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        debug_assert_eq!(*id, PassId::Resolve);
+        let mut pass = rec.pass(id);
+        let defines = ctx.settings.precision.defines();
+        let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &[]);
+        let b = ctx.scene.buffers();
+        let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
+        for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
+            let entries = [
+                (slot::FRAME, ctx.frame),
+                (slot::POSITIONS, &b.positions),
+                (slot::NORMALS, &b.normals),
+                (slot::UVS, &b.uvs),
+                (slot::INDICES, &b.indices),
+                (slot::TRI_MATERIALS, &b.triangle_materials),
+                (slot::MATERIALS, &b.materials),
+                (slot::TEXELS, &b.texels),
+                (slot::VIS, vis),
+                (slot::GBUFFER, gbuffer),
+            ];
+            pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+        }
     }
 }

@@ -1,138 +1,173 @@
-//! Shadow maps: each shadow-casting light's depth, drawn by the compute rasterizer
-//! (`wgsl/raster.wgsl`, layer 0) from the light, read by `wgsl/direct.wgsl` through
-//! `wgsl/shared/shadow.wgsl`. Directional lights get one orthographic face covering the scene's
-//! bounds, spot lights one perspective face covering the outer cone, point lights six faces.
+//! Shadow maps: each shadow-casting light's faces drawn by the compute rasterizer
+//! (`wgsl/raster.wgsl`, layer 0) from the light ([`crate::frame::light_faces`]), copied into one
+//! atlas that `wgsl/direct.wgsl` reads.
 
-use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use super::direct::ShadowInputs;
+use super::fill::Fill;
+use super::raster::{RasterMode, RasterTargets};
+use super::{FrameContext, Recorder, Stage};
+use crate::frame::{FrameUniform, ShadowFace, light_faces};
+use crate::gpu;
+use crate::plan::{PassId, Plan};
+use crate::settings::Settings;
+use crate::{Error, Result, SceneBuffers};
 
-use crate::gpu::FrameUniform;
-use crate::gpu::frame::CameraMatrices;
-use crate::scene::{Camera, Light, LightKind, Projection};
-
-/// Mirrors `struct ShadowFace` in `wgsl/shared/shadow.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct ShadowFace {
-    /// World to the face's view.
-    pub view: [[f32; 4]; 4],
-    /// The face's projection.
-    pub proj: [[f32; 4]; 4],
-    /// World size of a texel at unit depth (perspective) or anywhere (orthographic).
-    pub texel: f32,
-    /// 1 for an orthographic face.
-    pub ortho: u32,
-    /// First visibility word of the face in the atlas.
-    pub offset: u32,
-    /// Side of the face in texels.
-    pub resolution: u32,
+/// One shadow-casting light's faces in the atlas.
+struct Group {
+    light: usize,
+    first: usize,
+    count: usize,
 }
 
-const _: () = assert!(std::mem::size_of::<ShadowFace>() == 144);
+/// The faces of every shadow-casting light: a visibility buffer and a camera per face, the
+/// faces' lookup constants and the atlas.
+pub(crate) struct ShadowStage {
+    /// The plan's shadow passes this stage was made for (it is remade when they change).
+    key: Vec<PassId>,
+    resolution: u32,
+    groups: Vec<Group>,
+    face_uniforms: Vec<wgpu::Buffer>,
+    face_vis: Vec<wgpu::Buffer>,
+    fill: Fill,
+    faces: wgpu::Buffer,
+    light_faces: wgpu::Buffer,
+    atlas: wgpu::Buffer,
+}
 
-/// The cameras of `light`'s faces, for a scene within `bounds`.
-pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
-    let center = (bounds.0 + bounds.1) * 0.5;
-    let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
-    match light.kind {
-        LightKind::Directional { direction } => {
-            let d = direction.normalize();
-            vec![Camera {
-                eye: center - d * (2.0 * radius),
-                target: center,
-                up: Vec3::Y,
-                projection: Projection::Orthographic {
-                    height: 2.0 * radius,
-                    near: radius * 1e-3,
-                    far: 4.0 * radius,
-                },
-            }]
-        }
-        LightKind::Spot { position, direction, outer_cone, .. } => vec![Camera {
-            eye: position,
-            target: position + direction.normalize(),
-            up: Vec3::Y,
-            projection: Projection::Perspective {
-                fov_y_deg: (2.0 * outer_cone).to_degrees().clamp(1.0, 170.0),
-                near: radius * 1e-4,
-                far: None,
-                reverse_z: false,
-            },
-        }],
-        LightKind::Point { position, .. } => {
-            [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z]
-                .into_iter()
-                .map(|axis| Camera {
-                    eye: position,
-                    target: position + axis,
-                    up: if axis.y.abs() > 0.5 { Vec3::Z } else { Vec3::Y },
-                    projection: Projection::Perspective {
-                        fov_y_deg: 90.0,
-                        near: radius * 1e-4,
-                        far: None,
-                        reverse_z: false,
-                    },
-                })
-                .collect()
+impl ShadowStage {
+    /// The stage for the shadow lights of `plan`, or the one kept if it was made for them.
+    pub(crate) fn for_plan(
+        kept: Option<ShadowStage>,
+        device: &wgpu::Device,
+        s: &Settings,
+        scene: &SceneBuffers,
+        plan: &Plan,
+    ) -> Result<ShadowStage> {
+        let key: Vec<PassId> =
+            plan.passes.iter().filter(|p| matches!(p, PassId::Shadow { .. })).cloned().collect();
+        match kept {
+            Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => {
+                Ok(stage)
+            }
+            _ => Self::new(device, s, scene, key),
         }
     }
-}
 
-/// The frame uniform the rasterizer draws a face with, and the face as the lookup reads it.
-pub fn face(
-    camera: &Camera,
-    resolution: u32,
-    offset: u32,
-    counts: (u32, u32, u32),
-) -> (FrameUniform, ShadowFace) {
-    let m = CameraMatrices::new(camera, resolution, resolution);
-    let uniform = FrameUniform::new(camera, m, m, resolution, resolution, 0.0, counts);
-    let texel = match camera.projection {
-        // 2 tan(fov / 2) / resolution at unit depth.
-        Projection::Perspective { .. } => 2.0 / (m.proj.y_axis.y * resolution as f32),
-        Projection::Orthographic { height, .. } => height / resolution as f32,
-    };
-    let face = ShadowFace {
-        view: m.view.to_cols_array_2d(),
-        proj: m.proj.to_cols_array_2d(),
-        texel,
-        ortho: camera.is_orthographic() as u32,
-        offset,
-        resolution,
-    };
-    (uniform, face)
-}
-
-/// The faces of one shadow-casting light.
-pub struct LightFaces {
-    /// Index of the light in the scene's lights.
-    pub light: usize,
-    /// Index of its first face among all faces (atlas order).
-    pub first: usize,
-    /// Per face: the rasterizer's frame uniform and the lookup's face.
-    pub faces: Vec<(FrameUniform, ShadowFace)>,
-}
-
-/// Every shadow-casting light's faces at `resolution`, in atlas order. `counts` are the scene's
-/// (triangles, materials, vertices) for the rasterizer's uniform.
-pub fn light_faces(
-    info: &crate::scene::SceneInfo,
-    resolution: u32,
-    counts: (u32, u32, u32),
-) -> Vec<LightFaces> {
-    let bounds = info.bounds.unwrap_or((Vec3::splat(-50.0), Vec3::splat(50.0)));
-    let face_words = resolution * resolution;
-    let mut first = 0;
-    let mut out = Vec::new();
-    for (light, l) in info.lights.iter().enumerate().filter(|(_, l)| l.casts_shadows) {
-        let faces: Vec<(FrameUniform, ShadowFace)> = face_cameras(l, bounds)
+    fn new(
+        device: &wgpu::Device,
+        s: &Settings,
+        scene: &SceneBuffers,
+        key: Vec<PassId>,
+    ) -> Result<ShadowStage> {
+        let res = s.shadows.resolution;
+        let face_bytes = u64::from(res) * u64::from(res) * 8;
+        let info = scene.info();
+        let groups: Vec<Group> = light_faces(info, res, (0, 0, 0))
             .iter()
-            .enumerate()
-            .map(|(k, camera)| face(camera, resolution, (first + k) as u32 * face_words, counts))
+            .map(|g| Group { light: g.light, first: g.first, count: g.faces.len() })
             .collect();
-        let n = faces.len();
-        out.push(LightFaces { light, first, faces });
-        first += n;
+        let total: usize = groups.iter().map(|g| g.count).sum();
+        let limits = device.limits();
+        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        if face_bytes * total as u64 > limit {
+            return Err(Error::ExceedsLimit {
+                what: format!("{total} shadow-map faces of {res}x{res}"),
+                needed: face_bytes * total as u64,
+                limit,
+            });
+        }
+        let uniform = || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("deep-gbuffer.shadow.frame"),
+                size: std::mem::size_of::<FrameUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let storage =
+            |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
+        let face_vis: Vec<wgpu::Buffer> =
+            (0..total).map(|_| storage("deep-gbuffer.shadow.face", face_bytes)).collect();
+        let fill = Fill::new(device, face_vis.first().map_or(16, wgpu::Buffer::size), u32::MAX);
+        Ok(ShadowStage {
+            key,
+            resolution: res,
+            groups,
+            face_uniforms: (0..total).map(|_| uniform()).collect(),
+            face_vis,
+            fill,
+            faces: storage(
+                "deep-gbuffer.shadow.faces",
+                (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64,
+            ),
+            light_faces: storage(
+                "deep-gbuffer.shadow.lights",
+                (info.lights.len().max(2) * 8) as u64,
+            ),
+            atlas: storage("deep-gbuffer.shadow.atlas", face_bytes * total.max(1) as u64),
+        })
     }
-    out
+
+    /// Writes every face's camera (lights or bounds may have changed).
+    pub(crate) fn prepare(&self, queue: &wgpu::Queue, scene: &SceneBuffers) {
+        let info = scene.info();
+        let b = scene.buffers();
+        let counts = (b.triangle_count, b.material_count, b.vertex_count);
+        let mut faces = Vec::new();
+        let mut light_faces_words = vec![[0u32; 2]; info.lights.len().max(2)];
+        for group in light_faces(info, self.resolution, counts) {
+            light_faces_words[group.light] = [group.first as u32, group.faces.len() as u32];
+            for (k, (uniform, face)) in group.faces.into_iter().enumerate() {
+                let buffer = &self.face_uniforms[group.first + k];
+                queue.write_buffer(buffer, 0, bytemuck::bytes_of(&uniform));
+                faces.push(face);
+            }
+        }
+        if !faces.is_empty() {
+            queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
+        }
+        queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces_words));
+    }
+
+    /// What the direct kernel reads.
+    pub(crate) fn inputs(&self) -> ShadowInputs<'_> {
+        ShadowInputs { faces: &self.faces, light_faces: &self.light_faces, atlas: &self.atlas }
+    }
+
+    /// The atlas: every face's visibility words back to back.
+    pub(crate) fn atlas(&self) -> &wgpu::Buffer {
+        &self.atlas
+    }
+}
+
+impl Stage for ShadowStage {
+    fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        let PassId::Shadow { light, .. } = id else { unreachable!("{id} is not a shadow pass") };
+        let Some(group) = self.groups.iter().find(|g| g.light == *light) else {
+            unreachable!("the stage was made for the plan's shadow lights")
+        };
+        let faces = group.first..group.first + group.count;
+        {
+            let mut pass = rec.pass(id);
+            for face in faces.clone() {
+                let vis = &self.face_vis[face];
+                self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis);
+                let targets = RasterTargets { vis0: Some(vis), ..Default::default() };
+                ctx.raster.rasterizer.draw(
+                    ctx.device,
+                    ctx.pipelines,
+                    &mut pass,
+                    ctx.scene,
+                    &self.face_uniforms[face],
+                    RasterMode::Layer0,
+                    targets,
+                );
+            }
+        }
+        for face in faces {
+            let vis = &self.face_vis[face];
+            let bytes = vis.size();
+            rec.encoder().copy_buffer_to_buffer(vis, 0, &self.atlas, face as u64 * bytes, bytes);
+        }
+    }
 }

@@ -22,9 +22,9 @@ use rayon::prelude::*;
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::environment::Environment;
+use crate::frame::CameraMatrices;
+use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, vis_pack};
-use crate::gpu::FrameUniform;
-use crate::gpu::frame::CameraMatrices;
 use crate::scene::{Camera, GpuLight, Scene};
 use crate::settings::AoSettings;
 use crate::{Error, Result};
@@ -88,8 +88,8 @@ impl Shot<'_> {
         let (width, height) = self.size;
         if width == 0
             || height == 0
-            || width > crate::gpu::frame::MAX_IMAGE_SIDE
-            || height > crate::gpu::frame::MAX_IMAGE_SIDE
+            || width > crate::frame::MAX_IMAGE_SIDE
+            || height > crate::frame::MAX_IMAGE_SIDE
         {
             return Err(Error::setting("size", format!("{width}x{height} (each side 1 to 16384)")));
         }

@@ -4,21 +4,24 @@
 
 use std::sync::OnceLock;
 
-use deep_gbuffer::gpu::{FrameUniform, Gpu, GpuOptions};
+use deep_gbuffer::frame::FrameUniform;
+use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::{Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 
 /// The test device. A machine without an adapter fails the tests: they never skip silently.
 pub fn gpu() -> &'static Gpu {
     static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| match Gpu::new(&GpuOptions::default()) {
-        Ok(gpu) => {
-            eprintln!("test adapter: {}", gpu.describe());
-            gpu
+    GPU.get_or_init(|| {
+        match Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements()) {
+            Ok(gpu) => {
+                eprintln!("test adapter: {}", gpu.describe());
+                gpu
+            }
+            Err(e) => panic!(
+                "{e} (install the software Vulkan driver: apt-get install -y mesa-vulkan-drivers)"
+            ),
         }
-        Err(e) => panic!(
-            "{e} (install the software Vulkan driver: apt-get install -y mesa-vulkan-drivers)"
-        ),
     })
 }
 
@@ -134,4 +137,30 @@ pub fn white_box(rho: f32, le: f32) -> Scene {
     scene.materials[0].base_color = glam::Vec4::new(rho, rho, rho, 1.0);
     scene.materials[0].emissive = glam::Vec3::splat(le);
     scene
+}
+
+/// A `vec4<f32>` per-pixel buffer of `r`'s size, read back.
+pub fn read4(r: &Renderer, buffer: &wgpu::Buffer) -> Vec<glam::Vec4> {
+    let g = gpu();
+    r.read_vec4(&g.device, &g.queue, buffer).unwrap()
+}
+
+/// Asserts that `differs` holds for at most `fraction` of the pairs of `actual` and `expected`
+/// (kernels whose f32 evaluation order differs from the CPU's flip a few pixels across a
+/// threshold; such pixels must stay rare).
+pub fn assert_few_differ<T>(
+    actual: &[T],
+    expected: &[T],
+    fraction: f64,
+    differs: impl Fn(&T, &T) -> bool,
+    what: &str,
+) {
+    assert_eq!(actual.len(), expected.len(), "{what}: sizes");
+    let n = actual.iter().zip(expected).filter(|(a, e)| differs(a, e)).count();
+    assert!(
+        (n as f64) <= fraction * actual.len() as f64,
+        "{what}: {n} of {} pixels differ (at most {:.1}% may)",
+        actual.len(),
+        fraction * 100.0
+    );
 }

@@ -1,4 +1,4 @@
-// Per-frame constants shared by every kernel. Mirrors `FrameUniform` in src/gpu/frame.rs.
+// Per-frame constants shared by every kernel. Mirrors `FrameUniform` in src/frame/mod.rs.
 struct Frame {
     view: mat4x4<f32>,
     proj: mat4x4<f32>,

@@ -1,5 +1,5 @@
 // Shadow-map lookup: percentage-closer filtering over depth maps drawn by the compute rasterizer
-// (visibility words, depth in the high word). Mirrors `ShadowFace` in src/passes/shadow.rs;
+// (visibility words, depth in the high word). Mirrors `ShadowFace` in src/frame/shadow.rs;
 // src/cpu/direct.rs has the same functions.
 
 struct ShadowFace {

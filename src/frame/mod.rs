@@ -1,9 +1,77 @@
-//! The per-frame uniform every kernel reads.
+//! What the GPU kernels and their CPU twins share, free of any device: the camera matrices, the
+//! per-frame constants every kernel reads, and every `#[repr(C)]` struct mirrored in WGSL.
+//!
+//! Both `passes/` (which upload these) and `cpu/` (which read them as the shaders do) import
+//! this module; it imports neither. Each mirrored struct names its WGSL twin and is listed in
+//! [`MIRRORED`], which a test holds against naga's layout of the WGSL struct.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
 use crate::scene::Camera;
+
+mod pyramid;
+mod shadow;
+mod uniforms;
+
+pub use pyramid::{Level, MAX_LEVELS, PyramidLayout};
+pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
+pub use uniforms::{
+    AoUniform, CompositeUniform, DirectUniform, FillParams, LevelUniform, RadiosityUniform,
+    RasterCounters, ReflectionsUniform,
+};
+
+/// A `#[repr(C)]` struct's size and field offsets, and the WGSL struct it mirrors.
+#[derive(Clone, Copy, Debug)]
+pub struct MirrorLayout {
+    /// The Rust type.
+    pub rust: &'static str,
+    /// The WGSL file under `wgsl/` that declares (or includes) the twin.
+    pub file: &'static str,
+    /// The WGSL struct's name.
+    pub wgsl: &'static str,
+    /// `size_of` the Rust type.
+    pub size: usize,
+    /// Field name and byte offset (padding fields left out).
+    pub fields: &'static [(&'static str, usize)],
+}
+
+/// Implemented by every struct mirrored in WGSL (see [`MIRRORED`]).
+pub trait Mirrored: Pod {
+    /// Its layout and its twin.
+    const LAYOUT: MirrorLayout;
+}
+
+/// Declares `$ty` the mirror of the WGSL struct `$wgsl` in `wgsl/$file`, with `$field`s.
+macro_rules! mirrored {
+    ($ty:ty, $file:expr, $wgsl:expr, [$($field:ident),* $(,)?]) => {
+        impl $crate::frame::Mirrored for $ty {
+            const LAYOUT: $crate::frame::MirrorLayout = $crate::frame::MirrorLayout {
+                rust: stringify!($ty),
+                file: $file,
+                wgsl: $wgsl,
+                size: std::mem::size_of::<$ty>(),
+                fields: &[$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
+            };
+        }
+    };
+}
+pub(crate) use mirrored;
+
+/// Every struct the kernels share with the CPU by layout.
+pub const MIRRORED: &[MirrorLayout] = &[
+    FrameUniform::LAYOUT,
+    AoUniform::LAYOUT,
+    RadiosityUniform::LAYOUT,
+    ReflectionsUniform::LAYOUT,
+    DirectUniform::LAYOUT,
+    CompositeUniform::LAYOUT,
+    LevelUniform::LAYOUT,
+    FillParams::LAYOUT,
+    ShadowFace::LAYOUT,
+    crate::scene::GpuLight::LAYOUT,
+    crate::scene::upload::GpuMaterial::LAYOUT,
+];
 
 /// Pixels beyond each side of the viewport inside which vertices are snapped without clipping.
 /// Fixed-point coordinates stay below 2^28 (1/256 pixel), so exact edge functions fit in i64.
@@ -57,6 +125,31 @@ pub struct FrameUniform {
 pub const FRAME_DIAGNOSTICS: u32 = 1;
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 5 * 64 + 12 * 4);
+
+mirrored!(
+    FrameUniform,
+    "shared/frame.wgsl",
+    "Frame",
+    [
+        view,
+        proj,
+        inv_view,
+        prev_view,
+        prev_view_proj,
+        width,
+        height,
+        near,
+        far,
+        guard_x,
+        guard_y,
+        dz,
+        ortho,
+        triangle_count,
+        material_count,
+        vertex_count,
+        flags
+    ]
+);
 
 /// The matrices of one camera at one image size.
 #[derive(Clone, Copy, Debug, PartialEq)]

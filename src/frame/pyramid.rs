@@ -1,0 +1,48 @@
+//! Where each level of a depth pyramid lies in its packed buffer.
+
+/// Most levels built (level 0 is full resolution).
+pub const MAX_LEVELS: u32 = 6;
+
+/// One level's place in the packed buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Level {
+    /// First texel.
+    pub offset: u32,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+}
+
+/// Where each level lies in the packed f32 buffer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PyramidLayout {
+    /// Level 0 (full resolution) first.
+    pub levels: Vec<Level>,
+    /// Texels in all levels.
+    pub total: u32,
+}
+
+impl PyramidLayout {
+    /// The levels of a `width` x `height` image: halving (rounding up) until 1x1 or
+    /// [`MAX_LEVELS`].
+    pub fn new(width: u32, height: u32) -> Self {
+        let mut levels = Vec::new();
+        let (mut w, mut h, mut offset) = (width, height, 0);
+        loop {
+            levels.push(Level { offset, width: w, height: h });
+            offset += w * h;
+            if levels.len() as u32 == MAX_LEVELS || (w == 1 && h == 1) {
+                break;
+            }
+            w = w.div_ceil(2);
+            h = h.div_ceil(2);
+        }
+        PyramidLayout { levels, total: offset }
+    }
+
+    /// Bytes of one layer's pyramid buffer.
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.total) * 4
+    }
+}

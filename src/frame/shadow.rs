@@ -1,0 +1,139 @@
+//! The faces of shadow maps: each shadow-casting light's depth is drawn by the compute
+//! rasterizer (`wgsl/raster.wgsl`, layer 0) from the light and read by `wgsl/direct.wgsl`
+//! through `wgsl/shared/shadow.wgsl`. Directional lights get one orthographic face covering the
+//! scene's bounds, spot lights one perspective face covering the outer cone, point lights six
+//! faces.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::{CameraMatrices, FrameUniform, mirrored};
+use crate::scene::{Camera, Light, LightKind, Projection};
+
+/// Mirrors `struct ShadowFace` in `wgsl/shared/shadow.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct ShadowFace {
+    /// World to the face's view.
+    pub view: [[f32; 4]; 4],
+    /// The face's projection.
+    pub proj: [[f32; 4]; 4],
+    /// World size of a texel at unit depth (perspective) or anywhere (orthographic).
+    pub texel: f32,
+    /// 1 for an orthographic face.
+    pub ortho: u32,
+    /// First visibility word of the face in the atlas.
+    pub offset: u32,
+    /// Side of the face in texels.
+    pub resolution: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<ShadowFace>() == 144);
+mirrored!(ShadowFace, "direct.wgsl", "ShadowFace", [view, proj, texel, ortho, offset, resolution]);
+
+/// The cameras of `light`'s faces, for a scene within `bounds`.
+pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
+    let center = (bounds.0 + bounds.1) * 0.5;
+    let radius = ((bounds.1 - bounds.0).length() * 0.5).max(1e-3);
+    match light.kind {
+        LightKind::Directional { direction } => {
+            let d = direction.normalize();
+            vec![Camera {
+                eye: center - d * (2.0 * radius),
+                target: center,
+                up: Vec3::Y,
+                projection: Projection::Orthographic {
+                    height: 2.0 * radius,
+                    near: radius * 1e-3,
+                    far: 4.0 * radius,
+                },
+            }]
+        }
+        LightKind::Spot { position, direction, outer_cone, .. } => vec![Camera {
+            eye: position,
+            target: position + direction.normalize(),
+            up: Vec3::Y,
+            projection: Projection::Perspective {
+                fov_y_deg: (2.0 * outer_cone).to_degrees().clamp(1.0, 170.0),
+                near: radius * 1e-4,
+                far: None,
+                reverse_z: false,
+            },
+        }],
+        LightKind::Point { position, .. } => {
+            [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z]
+                .into_iter()
+                .map(|axis| Camera {
+                    eye: position,
+                    target: position + axis,
+                    up: if axis.y.abs() > 0.5 { Vec3::Z } else { Vec3::Y },
+                    projection: Projection::Perspective {
+                        fov_y_deg: 90.0,
+                        near: radius * 1e-4,
+                        far: None,
+                        reverse_z: false,
+                    },
+                })
+                .collect()
+        }
+    }
+}
+
+/// The frame uniform the rasterizer draws a face with, and the face as the lookup reads it.
+pub fn face(
+    camera: &Camera,
+    resolution: u32,
+    offset: u32,
+    counts: (u32, u32, u32),
+) -> (FrameUniform, ShadowFace) {
+    let m = CameraMatrices::new(camera, resolution, resolution);
+    let uniform = FrameUniform::new(camera, m, m, resolution, resolution, 0.0, counts);
+    let texel = match camera.projection {
+        // 2 tan(fov / 2) / resolution at unit depth.
+        Projection::Perspective { .. } => 2.0 / (m.proj.y_axis.y * resolution as f32),
+        Projection::Orthographic { height, .. } => height / resolution as f32,
+    };
+    let face = ShadowFace {
+        view: m.view.to_cols_array_2d(),
+        proj: m.proj.to_cols_array_2d(),
+        texel,
+        ortho: camera.is_orthographic() as u32,
+        offset,
+        resolution,
+    };
+    (uniform, face)
+}
+
+/// The faces of one shadow-casting light.
+pub struct LightFaces {
+    /// Index of the light in the scene's lights.
+    pub light: usize,
+    /// Index of its first face among all faces (atlas order).
+    pub first: usize,
+    /// Per face: the rasterizer's frame uniform and the lookup's face.
+    pub faces: Vec<(FrameUniform, ShadowFace)>,
+}
+
+/// Every shadow-casting light's faces at `resolution`, in atlas order. `counts` are the scene's
+/// (triangles, materials, vertices) for the rasterizer's uniform.
+pub fn light_faces(
+    info: &crate::scene::SceneInfo,
+    resolution: u32,
+    counts: (u32, u32, u32),
+) -> Vec<LightFaces> {
+    let bounds = info.bounds.unwrap_or((Vec3::splat(-50.0), Vec3::splat(50.0)));
+    let face_words = resolution * resolution;
+    let mut first = 0;
+    let mut out = Vec::new();
+    for (light, l) in info.lights.iter().enumerate().filter(|(_, l)| l.casts_shadows) {
+        let faces: Vec<(FrameUniform, ShadowFace)> = face_cameras(l, bounds)
+            .iter()
+            .enumerate()
+            .map(|(k, camera)| face(camera, resolution, (first + k) as u32 * face_words, counts))
+            .collect();
+        let n = faces.len();
+        out.push(LightFaces { light, first, faces });
+        first += n;
+    }
+    out
+}

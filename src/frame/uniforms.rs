@@ -1,0 +1,279 @@
+//! The kernels' own constants, one struct per WGSL `struct` they read as a uniform, and the
+//! raster's counter words.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::{PyramidLayout, mirrored};
+use crate::settings::{AoSettings, Normalization, RadiositySettings};
+
+/// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct AoUniform {
+    /// World-space radius.
+    pub radius: f32,
+    /// Bias β.
+    pub bias: f32,
+    /// Intensity.
+    pub intensity: f32,
+    /// Taps per pixel.
+    pub samples: u32,
+    /// Pyramid levels.
+    pub levels: u32,
+    /// [`AoSettings::mip_offset`].
+    pub mip_offset: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+    /// Level offsets in the packed pyramid (up to 8).
+    pub offsets: [[u32; 4]; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<AoUniform>() == 64);
+mirrored!(
+    AoUniform,
+    "ao.wgsl",
+    "Ao",
+    [radius, bias, intensity, samples, levels, mip_offset, offsets]
+);
+
+impl AoUniform {
+    /// The constants for `settings` over a pyramid of `layout`.
+    pub fn new(settings: &AoSettings, layout: &PyramidLayout) -> Self {
+        let mut offsets = [[0; 4]; 2];
+        for (i, l) in layout.levels.iter().enumerate().take(8) {
+            offsets[i / 4][i % 4] = l.offset;
+        }
+        AoUniform {
+            radius: settings.radius,
+            bias: settings.bias,
+            intensity: settings.intensity,
+            samples: settings.samples,
+            levels: layout.levels.len().min(8) as u32,
+            mip_offset: settings.mip_offset,
+            _pad: [0; 2],
+            offsets,
+        }
+    }
+}
+
+/// Mirrors `struct Radiosity` in `wgsl/radiosity.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct RadiosityUniform {
+    /// World-space gather radius.
+    pub radius: f32,
+    /// Taps per pixel.
+    pub samples: u32,
+    /// Damping delta of the fed-back indirect light.
+    pub damping: f32,
+    /// Weight of the history in the temporal filter.
+    pub alpha: f32,
+    /// History kept where the reprojected point is within this view depth of the previous layer 0.
+    pub tolerance: f32,
+    /// 1: a tap counts only if it faces the gathering point.
+    pub normal_test: u32,
+    /// 1: the previous frame's history may be used.
+    pub history: u32,
+    /// Frame count since the history began (turns the spiral).
+    pub turn: u32,
+    /// 0: [`Normalization::Cosine`], 1: [`Normalization::Paper`].
+    pub normalization: u32,
+    /// [`Boost::unsaturated`](crate::settings::Boost).
+    pub boost_unsaturated: f32,
+    /// [`Boost::saturated`](crate::settings::Boost).
+    pub boost_saturated: f32,
+    /// Padding to 16 bytes.
+    pub pad: u32,
+}
+
+mirrored!(
+    RadiosityUniform,
+    "radiosity.wgsl",
+    "Radiosity",
+    [
+        radius,
+        samples,
+        damping,
+        alpha,
+        tolerance,
+        normal_test,
+        history,
+        turn,
+        normalization,
+        boost_unsaturated,
+        boost_saturated
+    ]
+);
+
+impl RadiosityUniform {
+    /// The constants for `s`; `history` tells whether the previous frame may be used, `turn` the
+    /// frame count since the history began.
+    pub fn new(s: &RadiositySettings, history: bool, turn: u32) -> Self {
+        RadiosityUniform {
+            radius: s.radius,
+            samples: s.samples,
+            damping: s.damping,
+            alpha: s.alpha,
+            tolerance: s.history_tolerance,
+            normal_test: u32::from(s.normal_test),
+            history: u32::from(history),
+            turn,
+            normalization: match s.normalization {
+                Normalization::Cosine => 0,
+                Normalization::Paper => 1,
+            },
+            boost_unsaturated: s.boost.unsaturated,
+            boost_saturated: s.boost.saturated,
+            pad: 0,
+        }
+    }
+}
+
+/// Mirrors `struct Reflections` in `wgsl/reflections.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct ReflectionsUniform {
+    /// Environment (sky) radiance a missed ray sees.
+    pub sky: [f32; 3],
+    /// How far a ray is marched, in scene units.
+    pub max_distance: f32,
+    /// How far behind a surface a ray may pass and still hit it, in scene units.
+    pub thickness: f32,
+    /// 8x8 tiles across.
+    pub tiles_x: u32,
+    /// 8x8 tiles down.
+    pub tiles_y: u32,
+    /// Environment map width in texels (0: the constant `sky`).
+    pub env_width: u32,
+    /// Environment map height in texels.
+    pub env_height: u32,
+    /// 1: the layer-0 radiance already includes emission (the radiosity pass's B).
+    pub with_emission: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+mirrored!(
+    ReflectionsUniform,
+    "reflections.wgsl",
+    "Reflections",
+    [sky, max_distance, thickness, tiles_x, tiles_y, env_width, env_height, with_emission]
+);
+
+/// Mirrors `struct Direct` in `wgsl/direct.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct DirectUniform {
+    /// Lights in the light buffer.
+    pub light_count: u32,
+    /// Percentage-closer filtering radius in texels (0 without shadow maps).
+    pub pcf: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+mirrored!(DirectUniform, "direct.wgsl", "Direct", [light_count, pcf]);
+
+/// Mirrors `struct Composite` in `wgsl/composite.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct CompositeUniform {
+    /// The ambient radiance that AV scales.
+    pub ambient: [f32; 3],
+    /// Padding.
+    pub _pad: u32,
+}
+
+mirrored!(CompositeUniform, "composite.wgsl", "Composite", [ambient]);
+
+/// Mirrors `struct PyramidLevel` in `wgsl/pyramid.wgsl`: one level's source and destination.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct LevelUniform {
+    /// First texel of the source level.
+    pub src_offset: u32,
+    /// Source width.
+    pub src_width: u32,
+    /// Source height.
+    pub src_height: u32,
+    /// First texel of the level written.
+    pub dst_offset: u32,
+    /// Width written.
+    pub dst_width: u32,
+    /// Height written.
+    pub dst_height: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+mirrored!(
+    LevelUniform,
+    "pyramid.wgsl",
+    "PyramidLevel",
+    [src_offset, src_width, src_height, dst_offset, dst_width, dst_height]
+);
+
+impl LevelUniform {
+    /// The constants that build level `i` of `layout` (level 0 from the G-buffer).
+    pub fn new(layout: &PyramidLayout, i: usize) -> Self {
+        let dst = layout.levels[i];
+        let src = layout.levels[i.saturating_sub(1)];
+        LevelUniform {
+            src_offset: src.offset,
+            src_width: src.width,
+            src_height: src.height,
+            dst_offset: dst.offset,
+            dst_width: dst.width,
+            dst_height: dst.height,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// Mirrors `struct FillParams` in `wgsl/fill.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct FillParams {
+    /// The word written.
+    pub value: u32,
+    /// Words written.
+    pub count: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+mirrored!(FillParams, "fill.wgsl", "FillParams", [value, count]);
+
+/// The raster's counter words (`bins` in `wgsl/raster.wgsl`, an `array<atomic<u32>>`): the two
+/// bins' bookkeeping, then what the diagnostics report. The `DIAG_*` constants of the WGSL
+/// name the offsets of the `rejected_*` and `untextured` words; a test holds them equal.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct RasterCounters {
+    /// Bin 0: triangles binned since its last `bin_args`.
+    pub bin0_pending: u32,
+    /// Large triangles dropped because a bin was full.
+    pub dropped: u32,
+    /// Bin 0: entries of the current `raster_large` dispatch.
+    pub bin0_entries: u32,
+    /// Triangles binned this frame, over every raster of the frame.
+    pub binned: u32,
+    /// Bin 1: triangles binned since its last `bin_args`.
+    pub bin1_pending: u32,
+    /// Unused.
+    pub _unused0: u32,
+    /// Bin 1: entries of the current `raster_large` dispatch.
+    pub bin1_entries: u32,
+    /// Unused.
+    pub _unused1: u32,
+    /// Triangles rejected for a vertex index past the vertex count (`DIAG_INDEX`).
+    pub rejected_indices: u32,
+    /// Triangles rejected for a material id past the material count (`DIAG_MATERIAL`).
+    pub rejected_materials: u32,
+    /// Triangles rejected for a NaN or infinite position (`DIAG_POSITION`).
+    pub rejected_positions: u32,
+    /// Triangles drawn untextured, their texture outside the texel buffer (`DIAG_TEXTURE`).
+    pub untextured: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<RasterCounters>() == 48);
