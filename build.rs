@@ -69,27 +69,10 @@ fn main() {
                     | naga::valid::Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
             }
             let label = format!("wgsl/{name} with [{}]", defines.join(", "));
-            let module = match naga::front::wgsl::parse_str(&source) {
-                Ok(m) => m,
+            let (module, info) = match compile(&source, caps, &label) {
+                Ok(compiled) => compiled,
                 Err(e) => {
-                    let _ = writeln!(
-                        failures,
-                        "{label}:\n{}",
-                        e.emit_to_string_with_path(&source, &label)
-                    );
-                    continue;
-                }
-            };
-            let info = match naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
-                .validate(&module)
-            {
-                Ok(info) => info,
-                Err(e) => {
-                    let _ = writeln!(
-                        failures,
-                        "{label}:\n{}",
-                        e.emit_to_string_with_path(&source, &label)
-                    );
+                    let _ = writeln!(failures, "{label}:\n{e}");
                     continue;
                 }
             };
@@ -178,6 +161,20 @@ fn main() {
     bindings.push_str("}\n");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap()).join("bindings.rs");
     std::fs::write(out, bindings).expect("OUT_DIR is writable");
+}
+
+/// Parses and validates `source` with `caps`; an error is the message naming `label`.
+fn compile(
+    source: &str,
+    caps: naga::valid::Capabilities,
+    label: &str,
+) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| e.emit_to_string_with_path(source, label))?;
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+        .validate(&module)
+        .map_err(|e| e.emit_to_string_with_path(source, label))?;
+    Ok((module, info))
 }
 
 /// The `wgpu::BindingType` (as Rust source) of a bound global.
