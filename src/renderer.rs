@@ -895,13 +895,16 @@ impl Renderer {
         let (indirect, radiosity) = match self.radiosity_buffers() {
             Some(r) => {
                 let e = self.read_vec4(device, queue, r.irradiance)?;
-                let indirect: Vec<Vec3> =
-                    e.iter().map(|c| c.truncate() * c.w.clamp(0.0, 1.0)).collect();
+                let confidence = |c: &glam::Vec4| c.w.clamp(0.0, 1.0);
+                let indirect: Vec<Vec3> = e.iter().map(|c| c.truncate() * confidence(c)).collect();
                 let layer0 = self.read_gbuffer(device, queue, 0)?;
-                let radiosity = indirect
+                let radiosity = e
                     .iter()
                     .zip(&layer0.samples)
-                    .map(|(e, s)| (1.0 - s.metallic) * s.base_color / std::f32::consts::PI * *e)
+                    .map(|(c, s)| {
+                        let albedo = (1.0 - s.metallic) * s.base_color;
+                        albedo / std::f32::consts::PI * c.truncate() * confidence(c)
+                    })
                     .collect();
                 (Some(indirect), Some(radiosity))
             }
