@@ -170,6 +170,18 @@ impl Stages {
         }
     }
 
+    /// Every stage made so far, in frame order.
+    fn each(&self) -> Vec<&dyn Stage> {
+        let mut stages: Vec<&dyn Stage> = vec![&self.raster, &self.resolve];
+        stages.extend(self.ao.as_ref().map(|s| s as &dyn Stage));
+        stages.extend(self.shadows.as_ref().map(|s| s as &dyn Stage));
+        stages.push(&self.direct);
+        stages.extend(self.radiosity.as_ref().map(|s| s as &dyn Stage));
+        stages.extend(self.reflections.as_ref().map(|s| s as &dyn Stage));
+        stages.push(&self.composite);
+        stages
+    }
+
     /// What the frame's passes read: `i` and the stages' targets.
     fn context<'a>(&'a self, i: FrameInputs<'a>) -> FrameContext<'a> {
         let FrameInputs { device, pipelines, scene, settings, plan, frame, environment } = i;
@@ -499,8 +511,8 @@ impl Renderer {
             environment: self.environment.as_ref().map(|e| &e.texels),
         });
         let mut rec = Recorder::new(encoder, self.timestamps.as_mut());
-        for stage in [StageId::Raster, StageId::Direct] {
-            stages.get(stage).begin(&ctx, &mut rec);
+        for stage in stages.each() {
+            stage.begin(&ctx, &mut rec);
         }
         for pass in &plan.passes {
             stages.get(pass.stage()).record(pass, &ctx, &mut rec);

@@ -112,7 +112,8 @@ impl FrameContext<'_> {
 
 /// One part of the frame: records the passes it owns.
 pub(crate) trait Stage {
-    /// Records work outside any pass that the frame needs before its passes (clears).
+    /// Records work outside any pass that the frame needs before its passes (clears). Called on
+    /// every stage made so far, whether or not the plan runs it.
     fn begin(&self, _ctx: &FrameContext<'_>, _rec: &mut Recorder<'_>) {}
 
     /// Records `pass`, one of the stage's own.
