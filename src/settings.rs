@@ -1,7 +1,10 @@
 //! Settings of a [`Renderer`](crate::Renderer).
 
-use crate::frame::MAX_IMAGE_SIDE;
 use crate::{Error, Result};
+
+/// Largest image side: the rasterizer's fixed-point coordinates stay within the guard band's
+/// bound ([`GUARD_BAND_PIXELS`](crate::frame::GUARD_BAND_PIXELS)).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
 /// How layer 1 (the nearest surface at least Δz behind layer 0) is rasterized.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -8,7 +8,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use crate::scene::Camera;
+use crate::scene::upload::GpuMaterial;
+use crate::scene::{Camera, GpuLight};
 
 mod pyramid;
 mod shadow;
@@ -58,7 +59,8 @@ macro_rules! mirrored {
 }
 pub(crate) use mirrored;
 
-/// Every struct the kernels share with the CPU by layout.
+/// Every struct the kernels share with the CPU by layout (the scene's `GpuMaterial` and
+/// `GpuLight` are defined with the scene, which they describe, and declared mirrors here).
 pub const MIRRORED: &[MirrorLayout] = &[
     FrameUniform::LAYOUT,
     AoUniform::LAYOUT,
@@ -69,16 +71,40 @@ pub const MIRRORED: &[MirrorLayout] = &[
     LevelUniform::LAYOUT,
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,
-    crate::scene::GpuLight::LAYOUT,
-    crate::scene::upload::GpuMaterial::LAYOUT,
+    GpuLight::LAYOUT,
+    GpuMaterial::LAYOUT,
 ];
+
+mirrored!(
+    GpuMaterial,
+    "shared/material.wgsl",
+    "Material",
+    [
+        base_color,
+        emissive,
+        roughness,
+        metallic,
+        reflectivity,
+        flags,
+        texture_offset,
+        texture_width,
+        texture_height
+    ]
+);
+mirrored!(
+    GpuLight,
+    "direct.wgsl",
+    "Light",
+    [position, kind, direction, range, radiance, cos_inner, cos_outer]
+);
 
 /// Pixels beyond each side of the viewport inside which vertices are snapped without clipping.
 /// Fixed-point coordinates stay below 2^28 (1/256 pixel), so exact edge functions fit in i64.
 pub const GUARD_BAND_PIXELS: f32 = 1_048_576.0;
 
-/// Largest image side: keeps fixed-point coordinates within the guard band's bound.
-pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Largest image side (settings refuse larger): keeps fixed-point coordinates within the guard
+/// band's bound.
+pub use crate::settings::MAX_IMAGE_SIDE;
 
 /// Mirrors `struct Frame` in `wgsl/shared/frame.wgsl`.
 #[repr(C)]

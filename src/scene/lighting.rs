@@ -113,12 +113,6 @@ pub struct GpuLight {
 }
 
 const _: () = assert!(std::mem::size_of::<GpuLight>() == 64);
-crate::frame::mirrored!(
-    GpuLight,
-    "direct.wgsl",
-    "Light",
-    [position, kind, direction, range, radiance, cos_inner, cos_outer]
-);
 
 impl GpuLight {
     /// The GPU form of `light`.

@@ -46,22 +46,6 @@ pub struct GpuMaterial {
 }
 
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 64);
-crate::frame::mirrored!(
-    GpuMaterial,
-    "shared/material.wgsl",
-    "Material",
-    [
-        base_color,
-        emissive,
-        roughness,
-        metallic,
-        reflectivity,
-        flags,
-        texture_offset,
-        texture_width,
-        texture_height
-    ]
-);
 
 /// [`GpuMaterial::flags`] bit: both faces visible.
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
