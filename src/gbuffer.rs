@@ -237,15 +237,17 @@ impl GBufferLayer {
                 )
             })
             .collect();
-        Image::from_layers(
-            ImageAttributes::new(IntegerBounds::from_dimensions(
-                exr_layers.first().map_or((0, 0), |l| l.size.into()),
-            )),
-            exr_layers,
-        )
-        .write()
-        .to_file(path)
-        .map_err(write_error)
+        crate::output::write_replacing(path, |tmp| {
+            Image::from_layers(
+                ImageAttributes::new(IntegerBounds::from_dimensions(
+                    exr_layers.first().map_or((0, 0), |l| l.size.into()),
+                )),
+                exr_layers,
+            )
+            .write()
+            .to_file(tmp)
+            .map_err(write_error)
+        })
     }
 
     /// Reads the layers [`write_exr`](GBufferLayer::write_exr) wrote, in their order. A missing

@@ -664,7 +664,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             passes,
         };
         let json = serde_json::to_string_pretty(&file).expect("plain data serializes");
-        std::fs::write(path, json).map_err(|e| Error::Io { path: path.clone(), source: e })?;
+        output::write_bytes(path, json.as_bytes())?;
     }
     if args.out.is_none()
         && args.exr.is_none()

@@ -29,18 +29,69 @@ pub fn write_png_display(path: &Path, width: u32, height: u32, pixels: &[Vec3]) 
 }
 
 fn write_png_raw(path: &Path, width: u32, height: u32, bytes: Vec<u8>) -> Result<()> {
-    let image = image::RgbImage::from_raw(width, height, bytes).expect("3 bytes per pixel");
-    image.save(path).map_err(|e| Error::ImageWrite { path: path.into(), message: e.to_string() })
+    let fail = |message: String| Error::ImageWrite { path: path.into(), message };
+    let image = image::RgbImage::from_raw(width, height, bytes)
+        .ok_or_else(|| fail(format!("{width}x{height} needs {} bytes", 3 * width * height)))?;
+    write_replacing(path, |tmp| {
+        image.save_with_format(tmp, image::ImageFormat::Png).map_err(|e| fail(e.to_string()))
+    })
 }
 
 /// Writes a 32-bit float RGB EXR.
 pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
     let w = width as usize;
-    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
-        let c = pixels[y * w + x];
-        (c.x, c.y, c.z)
+    if pixels.len() < w * height as usize {
+        return Err(Error::ImageWrite {
+            path: path.into(),
+            message: format!(
+                "{width}x{height} needs {} pixels, {} given",
+                w * height as usize,
+                pixels.len()
+            ),
+        });
+    }
+    write_replacing(path, |tmp| {
+        exr::prelude::write_rgb_file(tmp, w, height as usize, |x, y| {
+            let c = pixels[y * w + x];
+            (c.x, c.y, c.z)
+        })
+        .map_err(|e| Error::ImageWrite { path: path.into(), message: e.to_string() })
     })
-    .map_err(|e| Error::ImageWrite { path: path.into(), message: e.to_string() })
+}
+
+/// Writes the file at `path` so that a failed write leaves whatever was there untouched:
+/// `write` fills a new file beside it (in the same folder, so the rename stays on one file
+/// system), which replaces `path` only once complete; on failure it is removed. An existing
+/// `path` that is not a regular file (a folder, a device, a pipe, a link) or that is read-only is
+/// refused before anything is written.
+pub fn write_replacing(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let refuse = |why: &str| Error::Io {
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidInput, why.to_string()),
+    };
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        if !meta.file_type().is_file() {
+            return Err(refuse("exists and is not a regular file; not replaced"));
+        }
+        if meta.permissions().readonly() {
+            return Err(refuse("exists and is read-only; not replaced"));
+        }
+    }
+    let name = path.file_name().ok_or_else(|| refuse("names no file"))?.to_string_lossy();
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.partial{ext}", std::process::id()));
+    let result =
+        write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Writes `bytes` to `path` with [`write_replacing`].
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_replacing(path, |tmp| std::fs::write(tmp, bytes).map_err(|e| Error::io(path, e)))
 }
 
 /// Depth shown as brightness: near is white, far dark, no surface black (range over both
@@ -103,4 +154,76 @@ pub fn tonemap(hdr: &[Vec3], exposure: f32) -> Vec<Vec3> {
             ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(Vec3::ZERO, Vec3::ONE)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn folder(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("deep-gbuffer-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// A write that fails half way leaves the file it aimed at as it was, and nothing beside it.
+    #[test]
+    fn a_failed_write_leaves_the_old_file() {
+        let dir = folder("failed-write");
+        let path = dir.join("image.exr");
+        std::fs::write(&path, b"the old image").unwrap();
+        let result = write_replacing(&path, |tmp| {
+            std::fs::write(tmp, b"half an ima").unwrap();
+            Err(Error::ImageWrite { path: path.clone(), message: "disk full".into() })
+        });
+        assert!(result.is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"the old image");
+        assert_eq!(entries(&dir), ["image.exr"]);
+        // A complete write replaces it.
+        write_exr(&path, 2, 1, &[Vec3::ONE, Vec3::ZERO]).unwrap();
+        assert_ne!(std::fs::read(&path).unwrap(), b"the old image");
+        assert_eq!(entries(&dir), ["image.exr"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// What is not a regular writable file is refused before anything is written.
+    #[test]
+    fn only_regular_writable_files_are_replaced() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = folder("refused-write");
+        let read_only = dir.join("kept.png");
+        std::fs::write(&read_only, b"kept").unwrap();
+        std::fs::set_permissions(&read_only, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let folder_path = dir.join("a-folder.exr");
+        std::fs::create_dir(&folder_path).unwrap();
+        let link = dir.join("link.png");
+        std::os::unix::fs::symlink(&read_only, &link).unwrap();
+        let socket = dir.join("socket.exr");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        let pixels = [Vec3::ONE];
+        for (path, why) in [
+            (&read_only, "read-only"),
+            (&folder_path, "not a regular file"),
+            (&link, "not a regular file"),
+            (&socket, "not a regular file"),
+        ] {
+            let png = write_png_linear(path, 1, 1, &pixels).unwrap_err().to_string();
+            let exr = write_exr(path, 1, 1, &pixels).unwrap_err().to_string();
+            assert!(png.contains(why) && exr.contains(why), "{}: {png} / {exr}", path.display());
+        }
+        assert_eq!(std::fs::read(&read_only).unwrap(), b"kept");
+        assert!(folder_path.is_dir() && link.is_symlink() && socket.exists());
+        assert_eq!(entries(&dir), ["a-folder.exr", "kept.png", "link.png", "socket.exr"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

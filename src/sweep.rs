@@ -20,7 +20,6 @@
 //!
 //! The estimates are the same on every run, so re-running a sweep gives the same errors.
 
-use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
@@ -505,7 +504,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         }
         out += &format!(",{:.4}\n", r.ssim);
     }
-    std::fs::write(path, out).map_err(|e| Error::io(path, e))
+    crate::output::write_bytes(path, out.as_bytes())
 }
 
 /// The (ms, RMSE) points of one effect, in row order.
@@ -535,7 +534,6 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         .iter()
         .filter(|(_, f)| rows.iter().any(|r| f(&r.knobs) != f(&rows[0].knobs)))
         .collect();
-    let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
     let mut out = format!("{heading}\n\n| AO taps | radiosity taps | layers |");
     for (name, _) in &varying {
         out += &format!(" {name} |");
@@ -569,7 +567,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         );
     }
     out += "\n`*`: on the Pareto front of that effect (no configuration is both faster and more accurate); the image's front is over the whole frame's time.\n";
-    f.write_all(out.as_bytes()).map_err(|e| Error::io(path, e))
+    crate::output::write_bytes(path, out.as_bytes())
 }
 
 /// The font of the plots (DejaVu Sans, assets/fonts/, under its own free licence).
@@ -578,7 +576,14 @@ static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 /// Draws `pareto.png`: one panel per effect, every configuration's relative error (RMSE over the
 /// truth's mean) against the GPU milliseconds of that effect's passes (the final image: of the
 /// whole frame), and its Pareto front ringed and joined.
+/// Points whose time or error is not finite (a configuration that measured NaN) are left out;
+/// a panel without points is drawn empty.
 pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
+    crate::output::write_replacing(path, |tmp| draw_pareto(tmp, path, rows, title))
+}
+
+/// Draws [`plot_pareto`]'s picture into `target` (errors name `path`).
+fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<()> {
     use plotters::prelude::*;
     let fail =
         |e: &dyn std::fmt::Display| Error::ImageWrite { path: path.into(), message: e.to_string() };
@@ -616,14 +621,19 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
     ));
     // One panel per effect, each with its own axes: the effects' times and errors differ by
     // orders of magnitude.
-    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    let root = BitMapBackend::new(target, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
     let panels = root.split_evenly((2, 2));
     for ((name, colour, points), panel) in series.iter().zip(&panels) {
         let colour = *colour;
+        let points: &Vec<(f64, f64)> =
+            &points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
         let range = |values: &mut dyn Iterator<Item = f64>| {
             let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+            if lo > hi {
+                return 0.0..1.0;
+            }
             let pad = ((hi - lo) * 0.1).max(hi.abs() * 0.01).max(1e-6);
             (lo - pad)..(hi + pad)
         };
@@ -670,6 +680,32 @@ pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A plot of nothing, or of configurations that measured NaN or infinity, is drawn (empty
+    /// panels) instead of searching forever for an axis range.
+    #[test]
+    fn the_plot_draws_empty_and_non_finite_sets() {
+        let dir = std::env::temp_dir().join(format!("deep-gbuffer-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let nan = ErrorStats { rmse: f32::NAN, truth_mean: 1.0, ..ErrorStats::default() };
+        let row = Row {
+            knobs: Grid::default().configurations()[0].clone(),
+            passes: vec![("ao".into(), f64::INFINITY), ("radiosity".into(), f64::NAN)],
+            total_ms: f64::NAN,
+            ao: nan,
+            indirect: nan,
+            reflections: Some(nan),
+            full: nan,
+            ssim: f32::NAN,
+            instability: Instability::default(),
+        };
+        for rows in [Vec::new(), vec![row.clone(), row]] {
+            let path = dir.join("pareto.png");
+            plot_pareto(&path, &rows, "nothing to see").unwrap();
+            assert!(image::open(&path).is_ok());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn the_grid_is_every_combination_with_the_taps_varying_fastest() {
