@@ -101,18 +101,36 @@ pub fn oct_decode(e: Vec2) -> Vec3 {
 }
 
 impl GBufferLayer {
-    /// Decodes the bytes of a G-buffer layer in `precision`.
-    pub fn decode(bytes: &[u8], width: u32, height: u32, precision: Precision) -> GBufferLayer {
-        let n = (width * height) as usize;
+    /// Decodes the bytes of a `width` x `height` G-buffer layer in `precision` (any alignment;
+    /// bytes past the layer are ignored). Too few bytes is an error saying how many it needs.
+    pub fn decode(
+        bytes: &[u8],
+        width: u32,
+        height: u32,
+        precision: Precision,
+    ) -> crate::Result<GBufferLayer> {
+        let n = u64::from(width) * u64::from(height);
+        let needed = n.checked_mul(bytes_per_pixel(precision)).filter(|b| *b <= bytes.len() as u64);
+        let Some(needed) = needed else {
+            return Err(crate::Error::setting(
+                "gbuffer",
+                format!(
+                    "a {width}x{height} layer needs {} bytes in the {precision:?} encoding, {} given",
+                    u128::from(n) * u128::from(bytes_per_pixel(precision)),
+                    bytes.len()
+                ),
+            ));
+        };
+        let bytes = &bytes[..needed as usize];
         let samples = match precision {
             Precision::Full => {
-                let f: &[f32] = bytemuck::cast_slice(&bytes[..n * 64]);
+                let f: Vec<f32> = bytemuck::pod_collect_to_vec(bytes);
                 f.chunks_exact(16)
                     .map(|w| GSample::from_words(w.try_into().expect("16 words")))
                     .collect()
             }
             Precision::Packed => {
-                let u: &[u32] = bytemuck::cast_slice(&bytes[..n * 32]);
+                let u: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
                 u.chunks_exact(8)
                     .map(|w| {
                         let depth = f32::from_bits(w[0]);
@@ -137,7 +155,7 @@ impl GBufferLayer {
                     .collect()
             }
         };
-        GBufferLayer { width, height, samples }
+        Ok(GBufferLayer { width, height, samples })
     }
 
     /// The sample at pixel (x, y).
@@ -295,5 +313,33 @@ impl GBufferLayer {
             return Err(bad("expected one or more G-buffer layers of one size".into()));
         }
         Ok(layers)
+    }
+}
+
+#[cfg(test)]
+mod decode_tests {
+    use super::*;
+
+    /// Too few bytes, and sizes whose byte count overflows, are errors; any alignment decodes.
+    #[test]
+    fn decode_checks_the_byte_count() {
+        let layer = GBufferLayer {
+            width: 3,
+            height: 2,
+            samples: (0..6)
+                .map(|i| GSample { depth: i as f32 + 0.5, ..GSample::default() })
+                .collect(),
+        };
+        let words = layer.encode_full();
+        let mut bytes = vec![0u8];
+        bytes.extend_from_slice(bytemuck::cast_slice(&words));
+        let shifted = GBufferLayer::decode(&bytes[1..], 3, 2, Precision::Full).unwrap();
+        assert_eq!(shifted.samples, layer.samples);
+        for (w, h) in [(5, 5), (u32::MAX, u32::MAX), (1 << 20, 1 << 20)] {
+            for precision in [Precision::Full, Precision::Packed] {
+                let e = GBufferLayer::decode(&bytes[1..], w, h, precision).unwrap_err();
+                assert!(e.to_string().contains("bytes"), "{e}");
+            }
+        }
     }
 }

@@ -802,7 +802,7 @@ impl Renderer {
     ) -> Result<GBufferLayer> {
         let bytes = gpu::read_buffer(device, queue, self.gbuffer_buffer(layer))?;
         let s = &self.settings;
-        Ok(GBufferLayer::decode(&bytes, s.width, s.height, s.precision))
+        GBufferLayer::decode(&bytes, s.width, s.height, s.precision)
     }
 
     /// Whether the last frame ran `effect`.
