@@ -471,7 +471,9 @@ impl Renderer {
     /// Records one frame, every pass of its [`plan`](Renderer::plan), into `encoder`. Submit
     /// it, then read the results with [`read_terms`](Renderer::read_terms) or
     /// [`read_gbuffer`](Renderer::read_gbuffer), or use
-    /// [`gbuffer_buffer`](Renderer::gbuffer_buffer) in your own passes.
+    /// [`gbuffer_buffer`](Renderer::gbuffer_buffer) in your own passes. GPU validation errors
+    /// while recording (buffers of another device, for one) are returned as [`Error::Gpu`];
+    /// after an error the encoder should be dropped, not submitted.
     pub fn encode(
         &mut self,
         device: &wgpu::Device,
@@ -480,7 +482,9 @@ impl Renderer {
         scene: &SceneBuffers,
         camera: &Camera,
     ) -> Result<()> {
-        self.encode_frame(device, queue, encoder, scene, camera, false)
+        gpu::scoped(device, "deep-gbuffer.frame", || {
+            self.encode_frame(device, queue, encoder, scene, camera, false)
+        })
     }
 
     /// Records a frame; `provided`: the G-buffer layers and visibility depths were written by
@@ -635,9 +639,12 @@ impl Renderer {
             });
         }
         self.encode(device, queue, encoder, scene, camera)?;
-        let hdr = self.stages.composite.hdr();
-        self.present.record(device, &self.pipelines, encoder, &self.frame, hdr, texture, (w, h));
-        Ok(())
+        gpu::scoped(device, "deep-gbuffer.present", || {
+            let hdr = self.stages.composite.hdr();
+            let pipelines = &self.pipelines;
+            self.present.record(device, pipelines, encoder, &self.frame, hdr, texture, (w, h));
+            Ok(())
+        })
     }
 
     /// Encodes and submits one frame on `queue`.

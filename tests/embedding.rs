@@ -16,6 +16,11 @@ fn host_device() -> (wgpu::Device, wgpu::Queue) {
     let adapter =
         pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
             .expect("an adapter (lavapipe: apt-get install -y mesa-vulkan-drivers)");
+    device_on(&adapter)
+}
+
+/// A device on `adapter` with what deep-gbuffer publishes it needs.
+fn device_on(adapter: &wgpu::Adapter) -> (wgpu::Device, wgpu::Queue) {
     let features =
         Renderer::required_features() | (adapter.features() & Renderer::optional_features());
     let limits = Renderer::required_limits().using_resolution(adapter.limits());
@@ -333,4 +338,44 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     for (i, (a, b)) in image.iter().zip(&expected).enumerate() {
         assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
     }
+}
+
+/// Resources of another device (of the same instance) are typed errors, not panics in wgpu's
+/// error handler.
+#[test]
+fn another_devices_resources_are_errors() {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .expect("an adapter");
+    let (device, queue) = device_on(&adapter);
+    let (other, _other_queue) = device_on(&adapter);
+    let scene = deep_gbuffer::Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let foreign = SceneBuffers::upload(&other, &scene).unwrap();
+    let mut renderer = Renderer::new(&device, &queue, Settings::with_size(16, 12)).unwrap();
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let e = renderer.encode(&device, &queue, &mut encoder, &foreign, &camera).unwrap_err();
+    assert!(matches!(e, deep_gbuffer::Error::Gpu { .. }), "{e}");
+    let e = renderer.render(&device, &queue, &foreign, &camera).unwrap_err();
+    assert!(matches!(e, deep_gbuffer::Error::Gpu { .. }), "{e}");
+    // Its own scene still renders, and a texture of another device is refused.
+    let own = SceneBuffers::upload(&device, &scene).unwrap();
+    renderer.render(&device, &queue, &own, &camera).unwrap();
+    let texture = other.create_texture(&wgpu::TextureDescriptor {
+        label: Some("foreign"),
+        size: wgpu::Extent3d { width: 16, height: 12, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING,
+        view_formats: &[],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let e = renderer
+        .encode_to_texture(&device, &queue, &mut encoder, &own, &camera, &texture)
+        .unwrap_err();
+    assert!(matches!(e, deep_gbuffer::Error::Gpu { .. }), "{e}");
 }
