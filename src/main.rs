@@ -233,8 +233,13 @@ struct RenderArgs {
     #[arg(long)]
     environment: Option<std::path::PathBuf>,
     /// Colour boost of reflected light, UNSATURATED,SATURATED (1,1: none, energy conserving).
+    /// The feedback gain, normalisation factor (cosine 1, paper 2) x damping x the larger boost,
+    /// must stay below 1.
     #[arg(long, default_value = "1,1", value_parser = parse_boost)]
     boost: Boost,
+    /// Damping delta of the indirect light fed back into the next frame's radiosity, in (0, 1].
+    #[arg(long, default_value_t = RadiositySettings::default().damping)]
+    damping: f32,
 }
 
 fn parse_boost(s: &str) -> std::result::Result<Boost, String> {
@@ -553,6 +558,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             radius: args.radiosity_radius,
             normalization: args.normalization,
             boost: args.boost,
+            damping: args.damping,
             ..RadiositySettings::default()
         },
         effects: Effects::parse(&args.effects)?,

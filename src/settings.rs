@@ -324,7 +324,30 @@ impl RadiositySettings {
                 return Err(Error::setting(name, format!("{value} (must be in [0, 16])")));
             }
         }
+        let gain = self.feedback_gain();
+        if gain >= 1.0 {
+            return Err(Error::setting(
+                "radiosity.damping",
+                format!(
+                    "feedback gain {gain} (normalisation factor x damping {} x largest boost) must \
+                     stay below 1, or the fed-back light can grow without bound",
+                    self.damping
+                ),
+            ));
+        }
         Ok(())
+    }
+
+    /// The most the fed-back light can grow per frame: `k * damping * max boost`, with `k` = 1
+    /// for [`Normalization::Cosine`] (the gather reads at most `pi max B`) and 2 for
+    /// [`Normalization::Paper`] (at most `2 pi max B`), and an albedo of at most 1. Below 1 the
+    /// irradiance stays below `k pi (max boost x max direct + max emission) / (1 - gain)`.
+    pub fn feedback_gain(&self) -> f32 {
+        let k = match self.normalization {
+            Normalization::Cosine => 1.0,
+            Normalization::Paper => 2.0,
+        };
+        k * self.damping * self.boost.unsaturated.max(self.boost.saturated)
     }
 }
 

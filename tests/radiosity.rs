@@ -27,14 +27,42 @@ fn first_frame_matches_cpu_reference() {
     first_frame_against_cpu(RadiositySettings::default());
 }
 
-/// The paper's 2 pi / M normalisation and a colour boost, against the same CPU reference.
+/// The paper's 2 pi / M normalisation and a colour boost, against the same CPU reference (with a
+/// damping that keeps the feedback gain 2 x 0.2 x 2 below 1).
 #[test]
 fn paper_normalization_and_boost_match_cpu_reference() {
     first_frame_against_cpu(RadiositySettings {
         normalization: Normalization::Paper,
         boost: Boost { unsaturated: 1.0, saturated: 2.0 },
+        damping: 0.2,
         ..Default::default()
     });
+}
+
+/// Settings whose feedback could grow without bound are refused, naming the gain.
+#[test]
+fn diverging_feedback_is_refused() {
+    for (normalization, damping, boost) in [
+        (Normalization::Cosine, 1.0, 1.0),
+        (Normalization::Cosine, 0.8, 4.0),
+        (Normalization::Paper, 0.8, 1.0),
+        (Normalization::Paper, 0.3, 2.0),
+    ] {
+        let s = RadiositySettings {
+            normalization,
+            damping,
+            boost: Boost { unsaturated: boost, saturated: boost },
+            ..Default::default()
+        };
+        let e = s.validate().unwrap_err().to_string();
+        assert!(e.contains("gain"), "{normalization:?} {damping} {boost}: {e}");
+    }
+    let bounded = RadiositySettings {
+        normalization: Normalization::Paper,
+        damping: 0.45,
+        ..Default::default()
+    };
+    bounded.validate().unwrap();
 }
 
 fn first_frame_against_cpu(radiosity: RadiositySettings) {

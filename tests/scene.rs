@@ -275,3 +275,40 @@ fn procedural_grid_reaches_millions_of_triangles() {
         scene.validate().unwrap();
     }
 }
+
+/// Values that are finite one by one but overflow together (intensity x colour, emission x
+/// strength), or are already infinite, are refused before anything reaches the GPU, naming the
+/// light or material.
+#[test]
+fn radiance_that_overflows_is_refused() {
+    let check = |scene: &Scene, what: &str| {
+        let e = scene.validate().and_then(|()| deep_gbuffer::SceneInfo::of(scene).validate());
+        let e = e.unwrap_err().to_string();
+        assert!(e.contains(what), "{what}: {e}");
+    };
+    let cornell = Scene::from_spec("builtin:cornell").unwrap();
+    let mut s = cornell.clone();
+    s.lights[0].intensity = 3e38;
+    s.lights[0].color = Vec3::splat(10.0);
+    check(&s, "colour x intensity");
+    let mut s = cornell.clone();
+    s.materials[0].emissive = Vec3::new(1e39_f64 as f32, 0.0, 0.0);
+    check(&s, "emission");
+    let mut s = cornell.clone();
+    s.materials[0].base_color.x = f32::NAN;
+    check(&s, "base colour");
+    let mut s = cornell.clone();
+    s.ambient = Vec3::splat(f32::MAX);
+    check(&s, "ambient");
+    // The same through a file: an OBJ whose material emits infinity.
+    let dir = temp_dir("overflow");
+    write(&dir, "m.mtl", "newmtl hot\nKd 0.5 0.5 0.5\nKe inf 1 1\n");
+    let obj =
+        write(&dir, "a.obj", "mtllib m.mtl\nusemtl hot\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let scene = Scene::load(&obj);
+    let text = match scene {
+        Err(e) => e.to_string(),
+        Ok(scene) => scene.validate().unwrap_err().to_string(),
+    };
+    assert!(text.contains("emission") || text.contains("Ke"), "{text}");
+}

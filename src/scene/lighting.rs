@@ -39,10 +39,12 @@ impl SceneInfo {
     /// Checks lights and ambient: finite, non-negative, unit directions, cone angles in order.
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, m: &str| Err(Error::InvalidScene(format!("light `{name}`: {m}")));
-        if !(self.ambient.is_finite() && self.ambient.min_element() >= 0.0) {
+        if !(self.ambient.min_element() >= 0.0 && self.ambient.max_element() <= super::MAX_RADIANCE)
+        {
             return Err(Error::InvalidScene(format!(
-                "ambient {} must be finite and >= 0",
-                self.ambient
+                "ambient {} must be finite, >= 0 and at most {:e}",
+                self.ambient,
+                super::MAX_RADIANCE
             )));
         }
         for l in &self.lights {
@@ -52,6 +54,16 @@ impl SceneInfo {
                 && l.intensity >= 0.0)
             {
                 return bad(&l.name, "colour and intensity must be finite and >= 0");
+            }
+            let radiance = l.color * l.intensity;
+            if !(radiance.max_element() <= super::MAX_RADIANCE) {
+                return bad(
+                    &l.name,
+                    &format!(
+                        "colour x intensity {radiance} exceeds {:e} (or overflows)",
+                        super::MAX_RADIANCE
+                    ),
+                );
             }
             let (position, direction, range) = match l.kind {
                 LightKind::Directional { direction } => (Vec3::ZERO, Some(direction), None),

@@ -42,6 +42,41 @@ pub struct Material {
     pub double_sided: bool,
 }
 
+/// The largest radiance a light (colour x intensity), an emissive material or the ambient term
+/// may have. Every product a frame forms from them (inverse-square falloff down to a millimetre
+/// at unit scale, the largest GGX lobe, sums over lights, the radiosity's bounded feedback) then
+/// stays far inside f32, so every buffer stays finite.
+pub const MAX_RADIANCE: f32 = 1e10;
+
+impl Material {
+    /// Checks the factors: colour, roughness, metallic and reflectivity finite in [0, 1],
+    /// emission finite, >= 0 and at most [`MAX_RADIANCE`].
+    pub fn validate(&self) -> Result<()> {
+        let bad =
+            |what: &str| Err(Error::InvalidScene(format!("material `{}`: {what}", self.name)));
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        if !self.base_color.to_array().into_iter().all(unit) {
+            return bad(&format!("base colour {} must lie in [0, 1]", self.base_color));
+        }
+        for (name, v) in [
+            ("roughness", self.roughness),
+            ("metallic", self.metallic),
+            ("reflectivity", self.reflectivity),
+        ] {
+            if !unit(v) {
+                return bad(&format!("{name} {v} must lie in [0, 1]"));
+            }
+        }
+        if !self.emissive.to_array().into_iter().all(|v| (0.0..=MAX_RADIANCE).contains(&v)) {
+            return bad(&format!(
+                "emission {} must be finite, >= 0 and at most {MAX_RADIANCE:e}",
+                self.emissive
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for Material {
     fn default() -> Self {
         Material {
@@ -306,6 +341,7 @@ impl Scene {
             )));
         }
         for m in &self.materials {
+            m.validate()?;
             if let Some(t) = m.base_color_texture
                 && t as usize >= self.textures.len()
             {
