@@ -56,7 +56,7 @@ impl SceneInfo {
                 return bad(&l.name, "colour and intensity must be finite and >= 0");
             }
             let radiance = l.color * l.intensity;
-            if !(radiance.max_element() <= super::MAX_RADIANCE) {
+            if !radiance.is_finite() || radiance.max_element() > super::MAX_RADIANCE {
                 return bad(
                     &l.name,
                     &format!(
