@@ -246,6 +246,63 @@ fn gltf_uris_outside_the_folder_or_on_the_network_are_refused() {
     std::fs::write(dir.join("bin/tri.bin"), triangle).unwrap();
     let scene = Scene::load(&write(&dir, "inside.gltf", &doc("bin/../bin/tri.bin"))).unwrap();
     assert_eq!(scene.triangle_count(), 1);
+    // A name that is a link is followed, and refused where it leads out of the folder or to
+    // something that is not a regular file (a device, a folder, a pipe that would hang a read).
+    let outside = temp_dir("uris-outside");
+    std::fs::write(outside.join("secret.bin"), [0u8; 36]).unwrap();
+    let link = |name: &str, to: &std::path::Path| {
+        let at = dir.join(name);
+        let _ = std::fs::remove_file(&at);
+        std::os::unix::fs::symlink(to, &at).unwrap();
+    };
+    link("escape.bin", &outside.join("secret.bin"));
+    link("zero.bin", std::path::Path::new("/dev/zero"));
+    link("folder.bin", &outside);
+    link("inner.bin", &dir.join("bin/tri.bin"));
+    let fifo = dir.join("pipe.bin");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let mut cases = vec![
+        ("escape.bin", "leads outside"),
+        ("zero.bin", "leads outside"),
+        ("folder.bin", "leads outside"),
+        ("missing.bin", "cannot be opened"),
+    ];
+    if made.is_ok_and(|s| s.success()) {
+        cases.push(("pipe.bin", "not a regular file"));
+    }
+    for (uri, expect) in cases {
+        let text = error_text(Scene::load(&write(&dir, "link.gltf", &doc(uri))));
+        assert!(text.contains("buffers[0].uri") && text.contains(expect), "{uri}: {text}");
+    }
+    let scene = Scene::load(&write(&dir, "link.gltf", &doc("inner.bin"))).unwrap();
+    assert_eq!(scene.triangle_count(), 1, "a link that stays inside is followed");
+}
+
+/// OBJ `mtllib` and MTL `map_Kd` stay inside the OBJ's folder too.
+#[test]
+fn obj_libraries_and_maps_stay_inside_the_folder() {
+    let dir = temp_dir("obj-paths");
+    let outside = temp_dir("obj-paths-outside");
+    std::fs::write(outside.join("m.mtl"), "newmtl a\nKd 1 0 0\n").unwrap();
+    let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let abs = outside.join("m.mtl");
+    let climb = format!("../{}/m.mtl", outside.file_name().unwrap().to_str().unwrap());
+    let linked = dir.join("linked.mtl");
+    let _ = std::fs::remove_file(&linked);
+    std::os::unix::fs::symlink(&abs, &linked).unwrap();
+    for (mtllib, expect) in [
+        (abs.to_str().unwrap(), "absolute"),
+        (climb.as_str(), "leads outside"),
+        ("linked.mtl", "leads outside"),
+    ] {
+        let obj = write(&dir, "a.obj", &format!("mtllib {mtllib}\nusemtl a\n{tri}"));
+        let text = error_text(Scene::load(&obj));
+        assert!(text.contains("mtllib") && text.contains(expect), "{mtllib}: {text}");
+    }
+    write(&dir, "m.mtl", "newmtl a\nKd 1 0 0\nmap_Kd /etc/passwd\n");
+    let obj = write(&dir, "b.obj", &format!("mtllib m.mtl\nusemtl a\n{tri}"));
+    let text = error_text(Scene::load(&obj));
+    assert!(text.contains("map_Kd") && text.contains("absolute"), "{text}");
 }
 
 #[test]

@@ -343,7 +343,13 @@ fn precheck(path: &Path) -> Result<()> {
         let list = doc.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
         for (i, item) in list.iter().enumerate() {
             if let Some(uri) = item.get("uri").and_then(|u| u.as_str()) {
-                check_uri(uri).map_err(|m| Error::format(path, format!("{key}[{i}].uri"), m))?;
+                let at = || format!("{key}[{i}].uri");
+                check_uri(uri).map_err(|m| Error::format(path, at(), m))?;
+                if !uri.starts_with("data:") {
+                    let folder = path.parent().unwrap_or(Path::new("."));
+                    super::contained(folder, Path::new(&percent_decode(uri)))
+                        .map_err(|m| Error::format(path, at(), format!("`{uri}` {m}")))?;
+                }
             }
         }
     }

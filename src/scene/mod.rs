@@ -9,7 +9,7 @@ pub mod lighting;
 pub mod obj;
 pub mod upload;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -40,6 +40,27 @@ pub struct Material {
     pub reflectivity: f32,
     /// Both faces are visible; otherwise back faces are culled.
     pub double_sided: bool,
+}
+
+/// `name` (a path a scene file gives, relative to its `folder`) as a file that may be read: it
+/// must be relative, stay inside `folder` once every link is followed, and be a regular file (not
+/// a folder, device or pipe). The error says why, for a message after the name.
+pub(crate) fn contained(folder: &Path, name: &Path) -> std::result::Result<PathBuf, String> {
+    if name.is_absolute() || name.has_root() {
+        return Err("is an absolute path: only files inside the scene's folder are read".into());
+    }
+    let root = folder
+        .canonicalize()
+        .map_err(|e| format!("cannot be looked up: the scene's folder: {e}"))?;
+    let file = root.join(name).canonicalize().map_err(|e| format!("cannot be opened: {e}"))?;
+    if !file.starts_with(&root) {
+        return Err("leads outside the scene's folder (through `..` or a link): refused".into());
+    }
+    let meta = std::fs::metadata(&file).map_err(|e| format!("cannot be opened: {e}"))?;
+    if !meta.is_file() {
+        return Err("is not a regular file (a folder, device or pipe): refused".into());
+    }
+    Ok(file)
 }
 
 /// The largest radiance a light (colour x intensity), an emissive material or the ambient term

@@ -15,7 +15,8 @@ pub fn load(path: &Path) -> Result<Scene> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_dir = dir.clone();
     parse(&text, path, &dir, move |mtl: &Path| {
-        let full = mtl_dir.join(mtl);
+        let full = super::contained(&mtl_dir, mtl)
+            .map_err(|m| Error::format(path, "mtllib", format!("`{}` {m}", mtl.display())))?;
         let text = std::fs::read_to_string(&full).map_err(|e| Error::io(&full, e))?;
         Ok((text, full))
     })
@@ -107,7 +108,10 @@ fn convert_material(
     let roughness = m.shininess.map_or(0.8, |ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt().sqrt());
     let base_color_texture = match &m.diffuse_texture {
         Some(name) => {
-            textures.push(super::gltf::load_texture_file(&dir.join(name))?);
+            let file = super::contained(dir, Path::new(name)).map_err(|why| {
+                Error::format(&dir.join(name), format!("material `{}` map_Kd", m.name), why)
+            })?;
+            textures.push(super::gltf::load_texture_file(&file)?);
             Some(textures.len() as u32 - 1)
         }
         None => None,
