@@ -109,7 +109,7 @@ fn convert_material(
     let base_color_texture = match &m.diffuse_texture {
         Some(name) => {
             let file = super::contained(dir, Path::new(name)).map_err(|why| {
-                Error::format(&dir.join(name), format!("material `{}` map_Kd", m.name), why)
+                Error::format(dir.join(name), format!("material `{}` map_Kd", m.name), why)
             })?;
             textures.push(super::gltf::load_texture_file(&file)?);
             Some(textures.len() as u32 - 1)
