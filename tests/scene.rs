@@ -369,3 +369,106 @@ fn radiance_that_overflows_is_refused() {
     };
     assert!(text.contains("emission") || text.contains("Ke"), "{text}");
 }
+
+#[test]
+fn a_grid_over_the_triangle_limit_is_refused_before_it_is_built() {
+    let text = error_text(Scene::from_spec("builtin:grid-1000000000"));
+    assert!(text.contains("limit"), "{text}");
+}
+
+/// A one-triangle glTF document with its buffer inline, for mutating into hostile variants.
+fn triangle_gltf() -> serde_json::Value {
+    let bytes: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .chain([0u16, 1, 2].iter().flat_map(|v| v.to_le_bytes()))
+        .collect();
+    let b64 = base64::encode(&bytes);
+    serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": format!("data:application/octet-stream;base64,{b64}"), "byteLength": 42}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    })
+}
+
+/// What the `gltf` crate's readers would panic on or allocate without bound is refused first,
+/// naming the place: accessor types, strides, counts, cameras and node graphs.
+#[test]
+fn hostile_gltf_structures_are_refused_before_reading() {
+    let dir = temp_dir("hostile-gltf");
+    let load = |doc: &serde_json::Value| {
+        let path = write(&dir, "hostile.gltf", &doc.to_string());
+        error_text(Scene::load(&path))
+    };
+    let base = triangle_gltf();
+    let scene = Scene::load(&write(&dir, "ok.gltf", &base.to_string())).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    type Mutation = fn(&mut serde_json::Value);
+    let cases: [(Mutation, &str); 9] = [
+        (|d| d["accessors"][1]["componentType"] = 5126.into(), "indices needs SCALAR"),
+        (|d| d["accessors"][1]["componentType"] = 5122.into(), "indices needs SCALAR"),
+        (
+            |d| {
+                d["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 1.into();
+                d["accessors"][1]["componentType"] = 5125.into();
+                d["accessors"][1]["type"] = "VEC2".into();
+            },
+            "TEXCOORD_0 needs VEC2",
+        ),
+        (|d| d["bufferViews"][0]["byteStride"] = 4.into(), "byteStride 4"),
+        (|d| d["accessors"][0]["count"] = 4.into(), "do not fit"),
+        (
+            |d| {
+                d["accessors"][0] = serde_json::json!({"componentType": 5126, "count": 3_000_000_000u64, "type": "VEC3", "sparse": {"count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 0}}});
+            },
+            "over the limit",
+        ),
+        (
+            |d| {
+                d["cameras"] = serde_json::json!([{"type": "perspective"}]);
+                d["nodes"][0]["camera"] = 0.into();
+            },
+            "without its `perspective` object",
+        ),
+        (|d| d["nodes"][0]["children"] = serde_json::json!([0]), "cycle"),
+        (
+            |d| {
+                d["nodes"] = serde_json::json!([{"mesh": 0, "children": [1]}, {"children": [0]}]);
+            },
+            "cycle",
+        ),
+    ];
+    for (i, (mutate, expect)) in cases.iter().enumerate() {
+        let mut doc = base.clone();
+        mutate(&mut doc);
+        let text = load(&doc);
+        assert!(text.contains(expect), "case {i}: {text}");
+    }
+    // Each node listing the next twice: 2^25 instances from a few hundred bytes.
+    let mut doc = base.clone();
+    let nodes: Vec<serde_json::Value> = (0..25)
+        .map(|i| serde_json::json!({"children": [i + 1, i + 1]}))
+        .chain([serde_json::json!({"mesh": 0})])
+        .collect();
+    doc["nodes"] = nodes.into();
+    let text = load(&doc);
+    assert!(text.contains("instances") && text.contains("limit"), "{text}");
+    // A material no primitive uses has its image never read (this one does not exist).
+    let mut doc = base.clone();
+    doc["images"] = serde_json::json!([{"uri": "missing.png"}]);
+    doc["textures"] = serde_json::json!([{"source": 0}]);
+    doc["materials"] =
+        serde_json::json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    let path = write(&dir, "unused.gltf", &doc.to_string());
+    assert!(Scene::load(&path).is_ok(), "an unused material's image is not decoded");
+    doc["meshes"][0]["primitives"][0]["material"] = 0.into();
+    let text = load(&doc);
+    assert!(text.contains("images[0]") && text.contains("missing.png"), "{text}");
+}

@@ -25,6 +25,12 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "cornell" => cornell(),
         "grid" => Ok(grid(GRID_DEFAULT_TRIANGLES)),
         _ => match name.strip_prefix("grid-").map(str::parse::<u32>) {
+            Some(Ok(n)) if u64::from(n) > super::Limits::default().triangles => {
+                Err(Error::InvalidScene(format!(
+                    "`{name}`: {n} triangles exceed the limit of {}",
+                    super::Limits::default().triangles
+                )))
+            }
             Some(Ok(n)) if n > 0 => Ok(grid(n)),
             _ => Err(Error::UnknownBuiltin(name.to_string())),
         },

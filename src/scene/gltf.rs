@@ -11,7 +11,8 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::Mode;
 
 use super::{
-    Camera, Light, LightKind, MAX_TEXTURE_SIDE, Material, MeshData, Projection, Scene, Texture,
+    Camera, Light, LightKind, Limits, MAX_TEXTURE_SIDE, Material, MeshData, Projection, Scene,
+    Texture,
 };
 use crate::{Error, Result};
 
@@ -20,7 +21,10 @@ pub fn load(path: &Path) -> Result<Scene> {
     precheck(path)?;
     // The `gltf` crate's validation can panic on some out-of-range indices; that is a malformed
     // file, not a crash.
-    let imported = std::panic::catch_unwind(|| gltf::import(path)).map_err(|panic| {
+    let limits = Limits::default();
+    // The checks above cover what the `gltf` crate's validation and readers are known to panic
+    // on; a panic left is a malformed file, not a crash.
+    let opened = std::panic::catch_unwind(|| gltf::Gltf::open(path)).map_err(|panic| {
         let message = panic
             .downcast_ref::<String>()
             .cloned()
@@ -28,33 +32,39 @@ pub fn load(path: &Path) -> Result<Scene> {
             .unwrap_or_default();
         Error::format(path, "glTF", format!("malformed document ({message})"))
     })?;
-    let (doc, buffers, images) = imported.map_err(|e| match e {
+    let gltf_error = |e: gltf::Error| match e {
         gltf::Error::Io(io) => Error::io(path, io),
         other => Error::format(path, "glTF", other.to_string()),
-    })?;
+    };
+    let gltf::Gltf { document: doc, blob } = opened.map_err(gltf_error)?;
+    let buffers = gltf::import_buffers(&doc, path.parent(), blob).map_err(gltf_error)?;
     let mut scene = Scene::default();
-    let mut image_textures: Vec<Option<u32>> = vec![None; images.len()];
+    // Images are decoded once each, only for materials a primitive uses, and only after their
+    // header's size fits what is left of the texel budget.
+    let used: std::collections::HashSet<usize> = doc
+        .meshes()
+        .flat_map(|m| m.primitives().filter_map(|p| p.material().index()).collect::<Vec<_>>())
+        .collect();
+    let mut image_textures: Vec<Option<u32>> = vec![None; doc.images().len()];
+    let mut texels_left = limits.texels;
     for m in doc.materials() {
         let name =
             m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_owned);
         let pbr = m.pbr_metallic_roughness();
-        let base_color_texture = match pbr.base_color_texture() {
+        let texture =
+            pbr.base_color_texture().filter(|_| m.index().is_some_and(|i| used.contains(&i)));
+        let base_color_texture = match texture {
             Some(info) => {
-                let image = info.texture().source().index();
-                let data = images.get(image).ok_or_else(|| {
-                    Error::format(
-                        path,
-                        format!("materials[`{name}`]"),
-                        format!("image {image} missing"),
-                    )
-                })?;
-                if image_textures[image].is_none() {
-                    let tex = convert_image(data)
-                        .map_err(|m| Error::format(path, format!("images[{image}]"), m))?;
+                let image = info.texture().source();
+                let i = image.index();
+                if image_textures[i].is_none() {
+                    let at = format!("images[{i}]");
+                    let tex = load_image(path, &image, &buffers, &mut texels_left)
+                        .map_err(|m| Error::format(path, &at, m))?;
                     scene.textures.push(tex);
-                    image_textures[image] = Some(scene.textures.len() as u32 - 1);
+                    image_textures[i] = Some(scene.textures.len() as u32 - 1);
                 }
-                image_textures[image]
+                image_textures[i]
             }
             None => None,
         };
@@ -78,7 +88,12 @@ pub fn load(path: &Path) -> Result<Scene> {
         return Err(Error::format(path, "scenes", "the file has no scene"));
     };
     let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    let mut instances = 0u64;
     while let Some((node, parent)) = stack.pop() {
+        instances += 1;
+        if instances > limits.instances {
+            return Err(Error::format(path, "nodes", "more node instances than the limit"));
+        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         stack.extend(node.children().map(|c| (c, world)));
         if let Some(mesh) = node.mesh() {
@@ -139,6 +154,13 @@ pub fn load(path: &Path) -> Result<Scene> {
                 } else {
                     indices
                 };
+                if scene.triangle_count() as u64 + indices.len() as u64 / 3 > limits.triangles {
+                    return Err(Error::format(
+                        path,
+                        &location,
+                        format!("the scene's triangles exceed the limit of {}", limits.triangles),
+                    ));
+                }
                 scene
                     .push_mesh(MeshData {
                         positions: &positions,
@@ -210,48 +232,49 @@ fn check_side(width: u32, height: u32) -> std::result::Result<(), String> {
     Ok(())
 }
 
-fn convert_image(data: &gltf::image::Data) -> std::result::Result<Texture, String> {
-    use gltf::image::Format as F;
-    check_side(data.width, data.height)?;
-    let p = &data.pixels;
-    let u16s = |i: usize| (u16::from_le_bytes([p[2 * i], p[2 * i + 1]]) >> 8) as u8;
-    let f32s = |i: usize| {
-        let v = f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
-        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+/// Decodes glTF image `image` (from a buffer view, a `data:` URI or a file in the scene's
+/// folder) once its header's size is checked against `MAX_TEXTURE_SIDE` and `texels_left`.
+fn load_image(
+    path: &Path,
+    image: &gltf::Image,
+    buffers: &[gltf::buffer::Data],
+    texels_left: &mut u64,
+) -> std::result::Result<Texture, String> {
+    let bytes: std::borrow::Cow<[u8]> = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data = buffers.get(view.buffer().index()).ok_or("its buffer is missing")?;
+            let range = view.offset()..view.offset().saturating_add(view.length());
+            data.get(range).ok_or("its buffer view lies outside the buffer")?.into()
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(rest) => {
+                let (_, encoded) =
+                    rest.split_once(";base64,").ok_or("a data: URI without base64")?;
+                base64::decode(encoded).map_err(|e| format!("data: URI: {e}"))?.into()
+            }
+            None => {
+                let folder = path.parent().unwrap_or(Path::new("."));
+                let file = super::contained(folder, Path::new(&percent_decode(uri)))
+                    .map_err(|m| format!("`{uri}` {m}"))?;
+                std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?.into()
+            }
+        },
     };
-    let n = (data.width * data.height) as usize;
-    let (channels, get): (usize, &dyn Fn(usize) -> u8) = match data.format {
-        F::R8 => (1, &|i| p[i]),
-        F::R8G8 => (2, &|i| p[i]),
-        F::R8G8B8 => (3, &|i| p[i]),
-        F::R8G8B8A8 => (4, &|i| p[i]),
-        F::R16 => (1, &u16s),
-        F::R16G16 => (2, &u16s),
-        F::R16G16B16 => (3, &u16s),
-        F::R16G16B16A16 => (4, &u16s),
-        F::R32G32B32FLOAT => (3, &f32s),
-        F::R32G32B32A32FLOAT => (4, &f32s),
-    };
-    let bytes_per = p.len() / n.max(1) / channels;
-    if p.len() < n * channels * bytes_per || bytes_per == 0 {
+    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    let (w, h) = reader.into_dimensions().map_err(|e| format!("image header: {e}"))?;
+    check_side(w, h)?;
+    let texels = u64::from(w) * u64::from(h);
+    if texels > *texels_left {
         return Err(format!(
-            "image data holds {} bytes, too few for {}x{}",
-            p.len(),
-            data.width,
-            data.height
+            "{w}x{h} texels exceed what is left of the decoded-texel limit ({texels_left})"
         ));
     }
-    let mut rgba8 = Vec::with_capacity(n * 4);
-    for i in 0..n {
-        let c = |k: usize| get(i * channels + k);
-        rgba8.extend_from_slice(&match channels {
-            1 => [c(0), c(0), c(0), 255],
-            2 => [c(0), c(0), c(0), c(1)],
-            3 => [c(0), c(1), c(2), 255],
-            _ => [c(0), c(1), c(2), c(3)],
-        });
-    }
-    Ok(Texture { width: data.width, height: data.height, rgba8 })
+    *texels_left -= texels;
+    let decoded = image::load_from_memory(&bytes).map_err(|e| e.to_string())?;
+    let rgba = decoded.to_rgba8();
+    Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
 }
 
 /// Loads an image file (PNG or JPEG) as an sRGB RGBA8 texture, refusing oversized images.
@@ -345,7 +368,8 @@ fn precheck(path: &Path) -> Result<()> {
             if let Some(uri) = item.get("uri").and_then(|u| u.as_str()) {
                 let at = || format!("{key}[{i}].uri");
                 check_uri(uri).map_err(|m| Error::format(path, at(), m))?;
-                if !uri.starts_with("data:") {
+                // Images are looked up when a used material needs them (`load_image`).
+                if key == "buffers" && !uri.starts_with("data:") {
                     let folder = path.parent().unwrap_or(Path::new("."));
                     super::contained(folder, Path::new(&percent_decode(uri)))
                         .map_err(|m| Error::format(path, at(), format!("`{uri}` {m}")))?;
@@ -353,6 +377,7 @@ fn precheck(path: &Path) -> Result<()> {
             }
         }
     }
+    check_document(&doc, &Limits::default()).map_err(|(at, m)| Error::format(path, at, m))?;
     let count = |key: &str| doc.get(key).and_then(|v| v.as_array()).map_or(0, Vec::len) as u64;
     let (accessors, materials) = (count("accessors"), count("materials"));
     let meshes = doc.get("meshes").and_then(|m| m.as_array()).cloned().unwrap_or_default();
@@ -384,6 +409,217 @@ fn precheck(path: &Path) -> Result<()> {
                     }
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// The JSON array `key` of `v` (empty when absent or not an array).
+fn list<'a>(v: &'a serde_json::Value, key: &str) -> &'a [serde_json::Value] {
+    v.get(key).and_then(|v| v.as_array()).map_or(&[], Vec::as_slice)
+}
+
+/// Bytes of one component of glTF component type `t`.
+fn component_bytes(t: u64) -> Option<u64> {
+    match t {
+        5120 | 5121 => Some(1),
+        5122 | 5123 => Some(2),
+        5125 | 5126 => Some(4),
+        _ => None,
+    }
+}
+
+/// Components of glTF accessor type `t`.
+fn type_components(t: &str) -> Option<u64> {
+    Some(match t {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        "MAT4" => 16,
+        _ => return None,
+    })
+}
+
+/// What the loader reads of an accessor used as `semantic`: the component types and the type
+/// it accepts.
+fn accepted(semantic: &str) -> Option<(&'static [u64], &'static str)> {
+    Some(match semantic {
+        "indices" => (&[5121, 5123, 5125], "SCALAR"),
+        "POSITION" | "NORMAL" => (&[5126], "VEC3"),
+        "TEXCOORD_0" => (&[5126, 5121, 5123], "VEC2"),
+        _ => return None,
+    })
+}
+
+/// Checks, before the `gltf` crate reads anything, what its readers would otherwise panic on or
+/// allocate without bound: the accessors the loader reads (component type, type, normalized
+/// flag, stride, that the data lies inside its buffer view, counts within `limits`), sparse
+/// accessors, camera objects, and the node graph (no node reached twice on one path; instances
+/// within `limits`). Errors are (where, what).
+fn check_document(
+    doc: &serde_json::Value,
+    limits: &Limits,
+) -> std::result::Result<(), (String, String)> {
+    let accessors = list(doc, "accessors");
+    let views = list(doc, "bufferViews");
+    let uint = |v: &serde_json::Value, key: &str| v.get(key).and_then(serde_json::Value::as_u64);
+    let check_accessor = |a: u64, semantic: &str| -> std::result::Result<(), String> {
+        let Some(acc) = accessors.get(a as usize) else { return Ok(()) };
+        let ctype = uint(acc, "componentType").unwrap_or(0);
+        let ty = acc.get("type").and_then(|t| t.as_str()).unwrap_or("");
+        let (Some(cbytes), Some(n)) = (component_bytes(ctype), type_components(ty)) else {
+            return Err(format!("accessors[{a}]: component type {ctype} or type `{ty}` unknown"));
+        };
+        if let Some((types, want)) = accepted(semantic) {
+            if !types.contains(&ctype) || ty != want {
+                return Err(format!(
+                    "accessors[{a}] ({semantic}) is {ty} of component type {ctype}; {semantic} needs {want} of {types:?}"
+                ));
+            }
+            let normalized = acc.get("normalized").and_then(|v| v.as_bool()).unwrap_or(false);
+            if semantic == "TEXCOORD_0" && ctype != 5126 && !normalized {
+                return Err(format!("accessors[{a}] (TEXCOORD_0) of integers must be normalized"));
+            }
+        }
+        let count = uint(acc, "count").unwrap_or(0);
+        let most = if semantic == "indices" { limits.triangles * 3 } else { limits.vertices };
+        if count > most {
+            return Err(format!("accessors[{a}] has {count} elements, over the limit of {most}"));
+        }
+        let element = cbytes * n;
+        if let Some(v) = uint(acc, "bufferView") {
+            let Some(view) = views.get(v as usize) else {
+                return Err(format!("accessors[{a}]: bufferView {v} does not exist"));
+            };
+            let stride = uint(view, "byteStride").unwrap_or(element);
+            if stride < element {
+                return Err(format!(
+                    "bufferViews[{v}]: byteStride {stride} is smaller than an element of accessors[{a}] ({element} bytes)"
+                ));
+            }
+            let offset = uint(acc, "byteOffset").unwrap_or(0);
+            let length = uint(view, "byteLength").unwrap_or(0);
+            let end = count.checked_sub(1).map_or(Some(0), |last| {
+                last.checked_mul(stride)?.checked_add(offset)?.checked_add(element)
+            });
+            if end.is_none_or(|end| end > length) {
+                return Err(format!(
+                    "accessors[{a}]: {count} elements of {element} bytes (stride {stride}, offset {offset}) do not fit bufferViews[{v}] ({length} bytes)"
+                ));
+            }
+        }
+        if let Some(sparse) = acc.get("sparse") {
+            let n = uint(sparse, "count").unwrap_or(0);
+            if n > count {
+                return Err(format!("accessors[{a}]: sparse count {n} exceeds count {count}"));
+            }
+        }
+        Ok(())
+    };
+    for (m, mesh) in list(doc, "meshes").iter().enumerate() {
+        for (p, prim) in list(mesh, "primitives").iter().enumerate() {
+            let at = format!("meshes[{m}].primitives[{p}]");
+            if let Some(attrs) = prim.get("attributes").and_then(|a| a.as_object()) {
+                for (semantic, v) in attrs {
+                    if let Some(a) = v.as_u64() {
+                        check_accessor(a, semantic).map_err(|e| (at.clone(), e))?;
+                    }
+                }
+            }
+            if let Some(a) = prim.get("indices").and_then(serde_json::Value::as_u64) {
+                check_accessor(a, "indices").map_err(|e| (at.clone(), e))?;
+            }
+        }
+    }
+    for (c, cam) in list(doc, "cameras").iter().enumerate() {
+        let ty = cam.get("type").and_then(|t| t.as_str()).unwrap_or("");
+        if !matches!(ty, "perspective" | "orthographic") || cam.get(ty).is_none() {
+            return Err((
+                format!("cameras[{c}]"),
+                format!("type `{ty}` without its `{ty}` object (perspective or orthographic)"),
+            ));
+        }
+    }
+    check_nodes(doc, limits)
+}
+
+/// The node graph: every node reached from a scene is reached on no path twice (no cycle), and
+/// the instances (one per path from a scene root) stay within `limits`.
+fn check_nodes(
+    doc: &serde_json::Value,
+    limits: &Limits,
+) -> std::result::Result<(), (String, String)> {
+    let nodes = list(doc, "nodes");
+    let children: Vec<Vec<usize>> = nodes
+        .iter()
+        .map(|n| {
+            list(n, "children")
+                .iter()
+                .filter_map(serde_json::Value::as_u64)
+                .map(|c| c as usize)
+                .filter(|c| *c < nodes.len())
+                .collect()
+        })
+        .collect();
+    // Instances below each node (itself included), saturating; a node met again while its own
+    // subtree is open closes a cycle.
+    #[derive(Clone, Copy, PartialEq)]
+    enum State {
+        New,
+        Open,
+        Done(u64),
+    }
+    let mut state = vec![State::New; nodes.len()];
+    let mut stack: Vec<(usize, usize)> = Vec::new();
+    for root in 0..nodes.len() {
+        if state[root] != State::New {
+            continue;
+        }
+        state[root] = State::Open;
+        stack.push((root, 0));
+        while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+            if let Some(&child) = children[node].get(*next) {
+                *next += 1;
+                match state[child] {
+                    State::Open => {
+                        return Err((
+                            format!("nodes[{child}]"),
+                            "is its own ancestor (the node graph has a cycle)".into(),
+                        ));
+                    }
+                    State::New => {
+                        state[child] = State::Open;
+                        stack.push((child, 0));
+                    }
+                    State::Done(_) => {}
+                }
+            } else {
+                let below = children[node].iter().fold(1u64, |sum, c| match state[*c] {
+                    State::Done(n) => sum.saturating_add(n),
+                    _ => sum,
+                });
+                state[node] = State::Done(below);
+                stack.pop();
+            }
+        }
+    }
+    let scenes = list(doc, "scenes");
+    for (s, scene) in scenes.iter().enumerate() {
+        let total = list(scene, "nodes")
+            .iter()
+            .filter_map(serde_json::Value::as_u64)
+            .filter_map(|n| match state.get(n as usize) {
+                Some(State::Done(k)) => Some(*k),
+                _ => None,
+            })
+            .fold(0u64, u64::saturating_add);
+        if total > limits.instances {
+            return Err((
+                format!("scenes[{s}]"),
+                format!("instances {total} nodes, over the limit of {}", limits.instances),
+            ));
         }
     }
     Ok(())

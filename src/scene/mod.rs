@@ -63,6 +63,32 @@ pub(crate) fn contained(folder: &Path, name: &Path) -> std::result::Result<PathB
     Ok(file)
 }
 
+/// What a scene file may make the loaders allocate. Counts read from a file are checked against
+/// these before anything of that size is allocated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Vertices (and index-buffer elements / 3 as triangles) an accessor may declare.
+    pub vertices: u64,
+    /// Triangles over the whole scene, every instance counted.
+    pub triangles: u64,
+    /// Node instances: a node counts once per path from a scene root to it.
+    pub instances: u64,
+    /// Texels decoded over all textures, counted from each image's header before decoding.
+    pub texels: u64,
+}
+
+impl Default for Limits {
+    /// 50 million vertices and triangles, a million node instances, 2^28 texels (1 GiB as RGBA8).
+    fn default() -> Self {
+        Limits {
+            vertices: 50_000_000,
+            triangles: 50_000_000,
+            instances: 1_000_000,
+            texels: 1 << 28,
+        }
+    }
+}
+
 /// The largest radiance a light (colour x intensity), an emissive material or the ambient term
 /// may have. Every product a frame forms from them (inverse-square falloff down to a millimetre
 /// at unit scale, the largest GGX lobe, sums over lights, the radiosity's bounded feedback) then
