@@ -73,17 +73,18 @@ impl Environment {
         };
         // Refuse an oversized image from its header, before anything is allocated for it.
         let meta = exr::meta::MetaData::read_from_file(path, false).map_err(read_error)?;
-        let header = meta.headers.first().ok_or_else(|| Error::ImageRead {
-            path: path.into(),
-            message: "no image layer".into(),
-        })?;
-        let size = header.layer_size;
-        let (w, h) =
-            (u32::try_from(size.0).unwrap_or(u32::MAX), u32::try_from(size.1).unwrap_or(u32::MAX));
-        Self::check_size(w, h).map_err(|m| Error::ImageRead {
-            path: path.into(),
-            message: format!("{m}, refused"),
-        })?;
+        if meta.headers.is_empty() {
+            return Err(Error::ImageRead { path: path.into(), message: "no image layer".into() });
+        }
+        // Every part: the layer read below is the first with RGBA channels, not always the first.
+        for header in meta.headers.iter() {
+            let size = header.layer_size;
+            let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+            Self::check_size(side(size.0), side(size.1)).map_err(|m| Error::ImageRead {
+                path: path.into(),
+                message: format!("{m}, refused"),
+            })?;
+        }
         let image = exr::prelude::read_first_rgba_layer_from_file(
             path,
             |resolution, _| (resolution.width(), vec![[0.0f32; 3]; resolution.area()]),
@@ -92,8 +93,9 @@ impl Environment {
             },
         )
         .map_err(read_error)?;
+        let size = image.layer_data.size;
         let (_, texels) = image.layer_data.channel_data.pixels;
-        Environment::new(w, h, texels)
+        Environment::new(size.0 as u32, size.1 as u32, texels)
             .map_err(|e| Error::ImageRead { path: path.into(), message: e.to_string() })
     }
 

@@ -735,6 +735,13 @@ impl Renderer {
                     ),
                 ));
             }
+            if let Some(p) = l.samples.iter().position(|x| !x.words().iter().all(|w| w.is_finite()))
+            {
+                return Err(Error::setting(
+                    "gbuffer",
+                    format!("layer {i} pixel {p} holds a NaN or infinite value"),
+                ));
+            }
         }
         Ok(())
     }

@@ -205,4 +205,13 @@ fn a_provided_gbuffer_that_does_not_fit_is_refused() {
             other => panic!("{name}: {other:?}"),
         }
     }
+    // NaN or infinity anywhere in a sample is refused, naming the layer and pixel.
+    let mut renderer =
+        deep_gbuffer::Renderer::new(&g.device, &g.queue, Settings::with_size(w, h)).unwrap();
+    for poison in [f32::NAN, f32::INFINITY] {
+        let mut bad = stored.clone();
+        bad[1].samples[7].emissive.y = poison;
+        let e = renderer.render_gbuffer(&g.device, &g.queue, &buffers, &camera, &bad).unwrap_err();
+        assert!(e.to_string().contains("layer 1 pixel 7"), "{e}");
+    }
 }

@@ -472,3 +472,31 @@ fn hostile_gltf_structures_are_refused_before_reading() {
     let text = load(&doc);
     assert!(text.contains("images[0]") && text.contains("missing.png"), "{text}");
 }
+
+/// A UTF-8 byte-order mark does not cost the OBJ its first line.
+#[test]
+fn obj_with_a_byte_order_mark_keeps_its_first_vertex() {
+    let dir = temp_dir("bom");
+    let obj = write(&dir, "bom.obj", "\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert_eq!(Scene::load(&obj).unwrap().triangle_count(), 1);
+}
+
+/// Cameras that cannot make an image say why: a zero `up`, an `up` along the view, a field of
+/// view below the minimum.
+#[test]
+fn degenerate_cameras_say_why() {
+    let camera = Scene::from_spec("builtin:cornell").unwrap().camera_or_default();
+    let mut zero_up = camera.clone();
+    zero_up.up = Vec3::ZERO;
+    let mut parallel = camera.clone();
+    parallel.up = camera.target - camera.eye;
+    let mut narrow = camera.clone();
+    if let deep_gbuffer::Projection::Perspective { fov_y_deg, .. } = &mut narrow.projection {
+        *fov_y_deg = 1e-30;
+    }
+    for (c, why) in [(zero_up, "up is zero"), (parallel, "parallel"), (narrow, "field of view")] {
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains(why), "{why}: {e}");
+    }
+    camera.validate().unwrap();
+}

@@ -41,7 +41,8 @@ pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
             vec![Camera {
                 eye: center - d * (2.0 * radius),
                 target: center,
-                up: Vec3::Y,
+                // A sun straight above or below looks along Y: take Z as up there.
+                up: if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y },
                 projection: Projection::Orthographic {
                     height: 2.0 * radius,
                     near: radius * 1e-3,
@@ -52,7 +53,7 @@ pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
         LightKind::Spot { position, direction, outer_cone, .. } => vec![Camera {
             eye: position,
             target: position + direction.normalize(),
-            up: Vec3::Y,
+            up: if direction.normalize().y.abs() > 0.99 { Vec3::Z } else { Vec3::Y },
             projection: Projection::Perspective {
                 fov_y_deg: (2.0 * outer_cone).to_degrees().clamp(1.0, 170.0),
                 near: radius * 1e-4,

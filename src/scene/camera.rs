@@ -109,19 +109,27 @@ impl Camera {
         matches!(self.projection, Projection::Orthographic { .. })
     }
 
-    /// Checks that the camera can produce an image.
+    /// Checks that the camera can produce an image: finite, distinct eye and target, an `up` that
+    /// is neither zero nor along the view, a field of view of at least [`MIN_FOV_DEG`].
     pub fn validate(&self) -> crate::Result<()> {
         let bad = |m: &str| Err(crate::Error::setting("camera", m.to_string()));
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
             return bad("eye, target and up must be finite");
         }
-        if (self.target - self.eye).length_squared() == 0.0 {
+        let forward = self.target - self.eye;
+        if forward.length_squared() == 0.0 {
             return bad("eye and target coincide");
+        }
+        if self.up.length_squared() == 0.0 {
+            return bad("up is zero");
+        }
+        if forward.normalize().cross(self.up.normalize()).length_squared() < 1e-12 {
+            return bad("up is parallel to the view direction");
         }
         match self.projection {
             Projection::Perspective { fov_y_deg, near, far, .. } => {
-                if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-                    return bad("field of view must be in (0, 180) degrees");
+                if !(MIN_FOV_DEG..180.0).contains(&fov_y_deg) {
+                    return bad("field of view must be in [0.001, 180) degrees");
                 }
                 if !(near > 0.0 && near.is_finite()) {
                     return bad("near must be positive and finite");
@@ -144,3 +152,7 @@ impl Camera {
         Ok(())
     }
 }
+
+/// The narrowest vertical field of view accepted, in degrees (narrower ones make the projection's
+/// scale overflow the rasterizer's fixed point for ordinary scene sizes).
+pub const MIN_FOV_DEG: f32 = 0.001;

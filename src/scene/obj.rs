@@ -12,13 +12,15 @@ use crate::{Error, Result};
 /// Loads an OBJ file and the MTL libraries it names (paths relative to the OBJ's folder).
 pub fn load(path: &Path) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // A byte-order mark would glue itself to the first keyword (and drop that line).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_dir = dir.clone();
-    parse(&text, path, &dir, move |mtl: &Path| {
+    parse(text, path, &dir, move |mtl: &Path| {
         let full = super::contained(&mtl_dir, mtl)
             .map_err(|m| Error::format(path, "mtllib", format!("`{}` {m}", mtl.display())))?;
         let text = std::fs::read_to_string(&full).map_err(|e| Error::io(&full, e))?;
-        Ok((text, full))
+        Ok((text.strip_prefix('\u{feff}').unwrap_or(&text).to_string(), full))
     })
 }
 
