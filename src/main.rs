@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
-use deep_gbuffer::scene::Projection;
+use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
     AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error, Layer1Variant,
     Normalization, PassId, Precision, Preset, RadiositySettings, Renderer, Result, Scene,
@@ -40,8 +40,38 @@ enum Command {
     Sweep(SweepArgs),
 }
 
+/// What a scene file may make the loaders allocate (`deep_gbuffer::scene::Limits`).
+#[derive(clap::Args)]
+struct LimitArgs {
+    /// Most vertices one glTF accessor may declare.
+    #[arg(long, default_value_t = Limits::default().vertices)]
+    max_vertices: u64,
+    /// Most triangles in the scene, every instance counted.
+    #[arg(long, default_value_t = Limits::default().triangles)]
+    max_triangles: u64,
+    /// Most node instances (a node counts once per path from a scene root).
+    #[arg(long, default_value_t = Limits::default().instances)]
+    max_instances: u64,
+    /// Most texels decoded over all textures (checked from each image's header).
+    #[arg(long, default_value_t = Limits::default().texels)]
+    max_texels: u64,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> Limits {
+        Limits {
+            vertices: self.max_vertices,
+            triangles: self.max_triangles,
+            instances: self.max_instances,
+            texels: self.max_texels,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct SweepArgs {
+    #[command(flatten)]
+    limits: LimitArgs,
     /// A .gltf, .glb or .obj file, or builtin:NAME.
     #[arg(default_value = "builtin:cornell")]
     scene: String,
@@ -104,6 +134,8 @@ enum TruthEffect {
 
 #[derive(clap::Args)]
 struct TruthArgs {
+    #[command(flatten)]
+    limits: LimitArgs,
     /// A .gltf, .glb or .obj file, or builtin:NAME.
     #[arg(default_value = "builtin:cornell")]
     scene: String,
@@ -152,6 +184,8 @@ struct TruthArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
+    #[command(flatten)]
+    limits: LimitArgs,
     /// A .gltf, .glb or .obj file, or builtin:NAME (cornell, grid, grid-<triangles>).
     #[arg(default_value = "builtin:cornell")]
     scene: String,
@@ -302,7 +336,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let ao =
         AoSettings { radius: args.ao_radius, samples: args.ao_samples, ..AoSettings::default() };
     ao.validate()?;
-    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
+    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let message =
         format!("tracing {:?} at {w}x{h}, {} rays per pixel, rows", args.effect, args.spp);
@@ -442,7 +476,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         k.validate(w, h)?;
     }
     let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
-    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
+    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;
@@ -490,8 +524,12 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
 
 /// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its camera
 /// with the `--camera` changes applied.
-fn scene_and_camera(spec: &str, camera: Option<&str>) -> Result<(Scene, Camera)> {
-    let mut scene = Scene::from_spec(spec)?;
+fn scene_and_camera(
+    spec: &str,
+    camera: Option<&str>,
+    limits: &LimitArgs,
+) -> Result<(Scene, Camera)> {
+    let mut scene = Scene::from_spec_with(spec, &limits.limits())?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -586,7 +624,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             message: format!("{} (must be finite and > 0)", args.exposure),
         });
     }
-    let (scene, mut camera) = scene_and_camera(&args.scene, args.camera.as_deref())?;
+    let (scene, mut camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;

@@ -20,17 +20,15 @@ const CORNELL_MTL: &str = include_str!("../../fixtures/cornell/CornellBox-Origin
 pub const GRID_DEFAULT_TRIANGLES: u32 = 100_000;
 
 /// A built-in scene by name.
-pub fn by_name(name: &str) -> Result<Scene> {
+pub fn by_name(name: &str, limits: &super::Limits) -> Result<Scene> {
     match name {
         "cornell" => cornell(),
         "grid" => Ok(grid(GRID_DEFAULT_TRIANGLES)),
         _ => match name.strip_prefix("grid-").map(str::parse::<u32>) {
-            Some(Ok(n)) if u64::from(n) > super::Limits::default().triangles => {
-                Err(Error::InvalidScene(format!(
-                    "`{name}`: {n} triangles exceed the limit of {}",
-                    super::Limits::default().triangles
-                )))
-            }
+            Some(Ok(n)) if u64::from(n) > limits.triangles => Err(Error::InvalidScene(format!(
+                "`{name}`: {n} triangles exceed the limit of {}",
+                limits.triangles
+            ))),
             Some(Ok(n)) if n > 0 => Ok(grid(n)),
             _ => Err(Error::UnknownBuiltin(name.to_string())),
         },

@@ -17,11 +17,10 @@ use super::{
 use crate::{Error, Result};
 
 /// Loads a `.gltf` or `.glb` file with its buffers and images.
-pub fn load(path: &Path) -> Result<Scene> {
-    precheck(path)?;
+pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
+    precheck(path, limits)?;
     // The `gltf` crate's validation can panic on some out-of-range indices; that is a malformed
     // file, not a crash.
-    let limits = Limits::default();
     // The checks above cover what the `gltf` crate's validation and readers are known to panic
     // on; a panic left is a malformed file, not a crash.
     let opened = std::panic::catch_unwind(|| gltf::Gltf::open(path)).map_err(|panic| {
@@ -265,6 +264,14 @@ fn load_image(
         .map_err(|e| e.to_string())?;
     let (w, h) = reader.into_dimensions().map_err(|e| format!("image header: {e}"))?;
     check_side(w, h)?;
+    take_texels(w, h, texels_left)?;
+    let decoded = image::load_from_memory(&bytes).map_err(|e| e.to_string())?;
+    let rgba = decoded.to_rgba8();
+    Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+}
+
+/// Takes a `w` x `h` image's texels from what is left of the decoded-texel budget.
+fn take_texels(w: u32, h: u32, texels_left: &mut u64) -> std::result::Result<(), String> {
     let texels = u64::from(w) * u64::from(h);
     if texels > *texels_left {
         return Err(format!(
@@ -272,18 +279,18 @@ fn load_image(
         ));
     }
     *texels_left -= texels;
-    let decoded = image::load_from_memory(&bytes).map_err(|e| e.to_string())?;
-    let rgba = decoded.to_rgba8();
-    Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+    Ok(())
 }
 
-/// Loads an image file (PNG or JPEG) as an sRGB RGBA8 texture, refusing oversized images.
-pub(crate) fn load_texture_file(path: &Path) -> Result<Texture> {
+/// Loads an image file (PNG or JPEG) as an sRGB RGBA8 texture, refusing oversized images and
+/// images over what is left of the texel budget, from the header, before decoding.
+pub(crate) fn load_texture_file(path: &Path, texels_left: &mut u64) -> Result<Texture> {
     let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
     let reader = reader.with_guessed_format().map_err(|e| Error::io(path, e))?;
     let (w, h) =
         reader.into_dimensions().map_err(|e| Error::format(path, "image header", e.to_string()))?;
     check_side(w, h).map_err(|m| Error::format(path, "image", m))?;
+    take_texels(w, h, texels_left).map_err(|m| Error::format(path, "image", m))?;
     let img = image::open(path).map_err(|e| Error::format(path, "image", e.to_string()))?;
     let rgba = img.to_rgba8();
     Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
@@ -350,7 +357,7 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-fn precheck(path: &Path) -> Result<()> {
+fn precheck(path: &Path, limits: &Limits) -> Result<()> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let json_bytes: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
         match gltf::Glb::from_slice(&bytes) {
@@ -377,7 +384,7 @@ fn precheck(path: &Path) -> Result<()> {
             }
         }
     }
-    check_document(&doc, &Limits::default()).map_err(|(at, m)| Error::format(path, at, m))?;
+    check_document(&doc, limits).map_err(|(at, m)| Error::format(path, at, m))?;
     let count = |key: &str| doc.get(key).and_then(|v| v.as_array()).map_or(0, Vec::len) as u64;
     let (accessors, materials) = (count("accessors"), count("materials"));
     let meshes = doc.get("meshes").and_then(|m| m.as_array()).cloned().unwrap_or_default();

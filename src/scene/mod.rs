@@ -242,10 +242,15 @@ pub struct MeshData<'a> {
 impl Scene {
     /// Loads a scene file by extension (`.gltf`, `.glb`, `.obj`).
     pub fn load(path: &Path) -> Result<Scene> {
+        Scene::load_with(path, &Limits::default())
+    }
+
+    /// [`load`](Scene::load) within `limits` instead of the default ones.
+    pub fn load_with(path: &Path, limits: &Limits) -> Result<Scene> {
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
-            Some("gltf" | "glb") => gltf::load(path),
-            Some("obj") => obj::load(path),
+            Some("gltf" | "glb") => gltf::load(path, limits),
+            Some("obj") => obj::load(path, limits),
             _ => Err(Error::format(
                 path,
                 "file name",
@@ -256,9 +261,14 @@ impl Scene {
 
     /// Loads `builtin:NAME` or a file path.
     pub fn from_spec(spec: &str) -> Result<Scene> {
+        Scene::from_spec_with(spec, &Limits::default())
+    }
+
+    /// [`from_spec`](Scene::from_spec) within `limits` instead of the default ones.
+    pub fn from_spec_with(spec: &str, limits: &Limits) -> Result<Scene> {
         match spec.strip_prefix("builtin:") {
-            Some(name) => builtin::by_name(name),
-            None => Scene::load(Path::new(spec)),
+            Some(name) => builtin::by_name(name, limits),
+            None => Scene::load_with(Path::new(spec), limits),
         }
     }
 

@@ -9,19 +9,32 @@ use glam::{Vec2, Vec3, Vec4};
 use super::{Material, MeshData, Scene, Texture};
 use crate::{Error, Result};
 
-/// Loads an OBJ file and the MTL libraries it names (paths relative to the OBJ's folder).
-pub fn load(path: &Path) -> Result<Scene> {
+/// Loads an OBJ file and the MTL libraries it names (paths relative to the OBJ's folder),
+/// within `limits`.
+pub fn load(path: &Path, limits: &super::Limits) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     // A byte-order mark would glue itself to the first keyword (and drop that line).
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mtl_dir = dir.clone();
-    parse(text, path, &dir, move |mtl: &Path| {
+    let scene = parse_within(text, path, &dir, limits, move |mtl: &Path| {
         let full = super::contained(&mtl_dir, mtl)
             .map_err(|m| Error::format(path, "mtllib", format!("`{}` {m}", mtl.display())))?;
         let text = std::fs::read_to_string(&full).map_err(|e| Error::io(&full, e))?;
         Ok((text.strip_prefix('\u{feff}').unwrap_or(&text).to_string(), full))
-    })
+    })?;
+    if scene.triangle_count() as u64 > limits.triangles {
+        return Err(Error::format(
+            path,
+            "f",
+            format!(
+                "{} triangles exceed the limit of {}",
+                scene.triangle_count(),
+                limits.triangles
+            ),
+        ));
+    }
+    Ok(scene)
 }
 
 /// Parses OBJ text; `load_mtl` returns an MTL library's text and the path used in messages.
@@ -29,6 +42,17 @@ pub(crate) fn parse(
     text: &str,
     path: &Path,
     dir: &Path,
+    load_mtl: impl Fn(&Path) -> Result<(String, PathBuf)>,
+) -> Result<Scene> {
+    parse_within(text, path, dir, &super::Limits::default(), load_mtl)
+}
+
+/// [`parse`] with `limits` on the textures' decoded texels.
+fn parse_within(
+    text: &str,
+    path: &Path,
+    dir: &Path,
+    limits: &super::Limits,
     load_mtl: impl Fn(&Path) -> Result<(String, PathBuf)>,
 ) -> Result<Scene> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
@@ -62,8 +86,9 @@ pub(crate) fn parse(
     let materials = materials.map_err(|e| Error::format(path, "mtllib", e.to_string()))?;
 
     let mut scene = Scene::default();
+    let mut images = Images { loaded: Vec::new(), texels_left: limits.texels };
     for m in &materials {
-        scene.materials.push(convert_material(m, dir, &mut scene.textures)?);
+        scene.materials.push(convert_material(m, dir, &mut scene.textures, &mut images)?);
     }
     let default_material = scene.materials.len() as u32;
     let mut used_default = false;
@@ -98,10 +123,17 @@ pub(crate) fn parse(
     Ok(scene)
 }
 
+/// The image files loaded so far (each decoded once) and the texels left in the budget.
+struct Images {
+    loaded: Vec<(PathBuf, u32)>,
+    texels_left: u64,
+}
+
 fn convert_material(
     m: &tobj::Material,
     dir: &Path,
     textures: &mut Vec<Texture>,
+    images: &mut Images,
 ) -> Result<Material> {
     let kd = m.diffuse.unwrap_or([0.8; 3]);
     let ks = m.specular.unwrap_or([0.0; 3]);
@@ -113,8 +145,15 @@ fn convert_material(
             let file = super::contained(dir, Path::new(name)).map_err(|why| {
                 Error::format(dir.join(name), format!("material `{}` map_Kd", m.name), why)
             })?;
-            textures.push(super::gltf::load_texture_file(&file)?);
-            Some(textures.len() as u32 - 1)
+            match images.loaded.iter().find(|(p, _)| *p == file) {
+                Some((_, index)) => Some(*index),
+                None => {
+                    textures.push(super::gltf::load_texture_file(&file, &mut images.texels_left)?);
+                    let index = textures.len() as u32 - 1;
+                    images.loaded.push((file, index));
+                    Some(index)
+                }
+            }
         }
         None => None,
     };
