@@ -81,7 +81,8 @@ struct SweepArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
+    /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// Rays per pixel of the ground truth.
@@ -142,7 +143,8 @@ struct TruthArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
+    /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// The effect to trace.
@@ -192,7 +194,8 @@ struct RenderArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,fov=deg (any subset; the rest from the scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
+    /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// Write depth, normal and base colour of the layers the frame drew, and each lighting term
@@ -320,9 +323,18 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
                     return Err(bad("fov given for an orthographic camera".into()));
                 }
             },
+            ("near", &[d]) => match &mut camera.projection {
+                Projection::Perspective { near, .. } | Projection::Orthographic { near, .. } => {
+                    *near = d
+                }
+            },
+            ("far", &[d]) => match &mut camera.projection {
+                Projection::Perspective { far, .. } => *far = Some(d),
+                Projection::Orthographic { far, .. } => *far = d,
+            },
             (k, v) => {
                 return Err(bad(format!(
-                    "`{k}` with {} values (expected eye, target, up: 3; fov: 1)",
+                    "`{k}` with {} values (expected eye, target, up: 3; fov, near, far: 1)",
                     v.len()
                 )));
             }

@@ -113,6 +113,11 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--camera".into(), "eye=0,1,0,target=0,1,0".into()], "coincide"),
         (vec!["render".into(), "--dz=-1".into()], "dz"),
         (vec!["render".into(), "--size".into(), "20000x10".into()], "size"),
+        (vec!["render".into(), "--camera".into(), "near=-1".into()], "near"),
+        (vec!["render".into(), "--camera".into(), "near=2,far=1".into()], "far"),
+        (vec!["render".into(), "--camera".into(), "up=0,0,0".into()], "up is zero"),
+        (vec!["render".into(), "--boost".into(), "4,4".into()], "gain"),
+        (vec!["render".into(), "--max-triangles".into(), "10".into()], "limit"),
     ];
     for (args, needle) in cases {
         let out = cli().args(&args).output().unwrap();

@@ -19,20 +19,31 @@ const CORNELL_MTL: &str = include_str!("../../fixtures/cornell/CornellBox-Origin
 /// Triangles of `builtin:grid` without a count.
 pub const GRID_DEFAULT_TRIANGLES: u32 = 100_000;
 
-/// A built-in scene by name.
+/// A built-in scene by name, refused (before a grid is built) when its triangles exceed
+/// `limits`.
 pub fn by_name(name: &str, limits: &super::Limits) -> Result<Scene> {
-    match name {
-        "cornell" => cornell(),
-        "grid" => Ok(grid(GRID_DEFAULT_TRIANGLES)),
+    let over = |n: u64| {
+        Err(Error::InvalidScene(format!(
+            "`{name}`: {n} triangles exceed the limit of {}",
+            limits.triangles
+        )))
+    };
+    let grid_size = match name {
+        "cornell" => {
+            let scene = cornell()?;
+            let n = scene.triangle_count() as u64;
+            return if n > limits.triangles { over(n) } else { Ok(scene) };
+        }
+        "grid" => GRID_DEFAULT_TRIANGLES,
         _ => match name.strip_prefix("grid-").map(str::parse::<u32>) {
-            Some(Ok(n)) if u64::from(n) > limits.triangles => Err(Error::InvalidScene(format!(
-                "`{name}`: {n} triangles exceed the limit of {}",
-                limits.triangles
-            ))),
-            Some(Ok(n)) if n > 0 => Ok(grid(n)),
-            _ => Err(Error::UnknownBuiltin(name.to_string())),
+            Some(Ok(n)) if n > 0 => n,
+            _ => return Err(Error::UnknownBuiltin(name.to_string())),
         },
+    };
+    if u64::from(grid_size) > limits.triangles {
+        return over(u64::from(grid_size));
     }
+    Ok(grid(grid_size))
 }
 
 /// The Cornell box (Cardenas and McGuire, 2011, public domain) with its classic camera and a
