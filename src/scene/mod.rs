@@ -49,6 +49,8 @@ pub(crate) fn contained(folder: &Path, name: &Path) -> std::result::Result<PathB
     if name.is_absolute() || name.has_root() {
         return Err("is an absolute path: only files inside the scene's folder are read".into());
     }
+    // A scene given as a bare file name lies in the working folder.
+    let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
     let root = folder
         .canonicalize()
         .map_err(|e| format!("cannot be looked up: the scene's folder: {e}"))?;
