@@ -111,3 +111,94 @@ proptest! {
         }
     }
 }
+
+/// A glTF document drawn field by field: a node graph (children lists that may repeat or loop),
+/// accessors with any component type, type, count, offset, stride and sparse part, a camera of
+/// either type with or without its object.
+fn structured_gltf() -> impl Strategy<Value = serde_json::Value> {
+    // Mostly what the `gltf` crate's own validation accepts, so the readers behind it are reached.
+    let component = prop::sample::select(vec![5120u64, 5121, 5122, 5123, 5125, 5126]);
+    let ty = prop::sample::select(vec!["SCALAR", "VEC2", "VEC3", "VEC4"]);
+    let count = prop_oneof![4 => 1u64..6, 1 => Just(3_000_000_000u64)];
+    let accessor =
+        (component, ty, count, prop::sample::select(vec![0u64, 4]), any::<bool>(), any::<bool>());
+    let children = prop::collection::vec(prop::collection::vec(0u64..4, 0..3), 4);
+    let stride = prop::option::of(prop::sample::select(vec![4u64, 8, 12, 16]));
+    let camera = (prop::sample::select(vec!["perspective", "orthographic"]), any::<bool>());
+    (accessor.clone(), accessor, children, stride, camera, any::<bool>())
+        .prop_map(|(uv, index, children, stride, (cam_type, with_object), sparse_position)| {
+            let bytes: Vec<u8> = (0..96u8).collect();
+            let data = format!("data:application/octet-stream;base64,{}", base64::encode(&bytes));
+            let drawn = |(c, t, n, offset, normalized, sparse): (u64, &str, u64, u64, bool, bool)| {
+                let mut a = serde_json::json!({"bufferView": 1, "componentType": c, "type": t, "count": n, "byteOffset": offset, "normalized": normalized});
+                if sparse {
+                    a["sparse"] = serde_json::json!({"count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 1}});
+                }
+                a
+            };
+            let mut position = serde_json::json!({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]});
+            if sparse_position {
+                position = serde_json::json!({"componentType": 5126, "count": 3_000_000_000u64, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1], "sparse": {"count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 0}}});
+            }
+            let mut view = serde_json::json!({"buffer": 0, "byteLength": 48});
+            if let Some(s) = stride {
+                view["byteStride"] = s.into();
+            }
+            let nodes: Vec<serde_json::Value> = children
+                .iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let mut n = serde_json::json!({"children": c});
+                    if i == 0 {
+                        n["mesh"] = 0.into();
+                        n["camera"] = 0.into();
+                    }
+                    n
+                })
+                .collect();
+            let mut camera = serde_json::json!({"type": cam_type});
+            if with_object {
+                camera[cam_type] = serde_json::json!({"yfov": 0.8, "znear": 0.1, "xmag": 1.0, "ymag": 1.0, "zfar": 10.0});
+            }
+            serde_json::json!({
+                "asset": {"version": "2.0"},
+                "buffers": [{"uri": data, "byteLength": 96}],
+                "bufferViews": [view, {"buffer": 0, "byteOffset": 48, "byteLength": 48}],
+                "accessors": [position, drawn(uv), drawn(index)],
+                "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}]}],
+                "cameras": [camera],
+                "nodes": nodes,
+                "scenes": [{"nodes": [0]}]
+            })
+        })
+}
+
+/// Panics seen by the process since the hook below was set (a caught one too).
+static PANICS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// Documents drawn field by field load or fail with an error, without any panic (not even
+    /// one the loader would catch) and within moments.
+    #[test]
+    fn structured_gltf_never_panics(doc in structured_gltf()) {
+        static HOOK: std::sync::Once = std::sync::Once::new();
+        HOOK.call_once(|| {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                PANICS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                previous(info);
+            }));
+        });
+        let dir = std::env::temp_dir().join(format!("deep-gbuffer-prop-structured-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("structured.gltf");
+        std::fs::write(&path, doc.to_string()).unwrap();
+        let before = PANICS.load(std::sync::atomic::Ordering::SeqCst);
+        let started = std::time::Instant::now();
+        let _ = Scene::load(&path);
+        prop_assert_eq!(PANICS.load(std::sync::atomic::Ordering::SeqCst), before, "{}", doc);
+        prop_assert!(started.elapsed().as_secs() < 5, "{}", doc);
+    }
+}
