@@ -642,7 +642,7 @@ impl Renderer {
         gpu::scoped(device, "deep-gbuffer.present", || {
             let hdr = self.stages.composite.hdr();
             let pipelines = &self.pipelines;
-            self.present.record(device, pipelines, encoder, &self.frame, hdr, texture, (w, h));
+            self.present.record(device, pipelines, encoder, &self.frame, hdr, texture);
             Ok(())
         })
     }

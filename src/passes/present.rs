@@ -14,7 +14,6 @@ impl Present {
     }
 
     /// Records the copy of `hdr` into `texture` (rgba16float or rgba32float, the frame's size).
-    #[expect(clippy::too_many_arguments, reason = "the device, the pass, and what it copies")]
     pub(crate) fn record(
         &mut self,
         device: &wgpu::Device,
@@ -23,8 +22,8 @@ impl Present {
         frame: &wgpu::Buffer,
         hdr: &wgpu::Buffer,
         texture: &wgpu::Texture,
-        size: (u32, u32),
     ) {
+        let size = (texture.width(), texture.height());
         if self.target.as_ref().is_none_or(|(t, _)| t != texture) {
             let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
             self.target = Some((texture.clone(), view));

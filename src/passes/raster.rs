@@ -51,9 +51,14 @@ fn bin_bytes(triangles: u32, limit: u64) -> u64 {
     ((u64::from(triangles) * 2 + 1024) * 2 * 8).min(limit & !15)
 }
 
-/// The buffers one raster step writes, besides the rasterizer's own.
-#[derive(Clone, Copy, Default)]
-pub(crate) struct RasterTargets<'a> {
+/// One raster step: the camera it draws with, what it writes, and the buffers it writes
+/// besides the rasterizer's own.
+#[derive(Clone, Copy)]
+pub(crate) struct Draw<'a> {
+    /// The frame uniform of the camera drawn from.
+    pub frame: &'a wgpu::Buffer,
+    /// What the step writes.
+    pub mode: RasterMode,
     /// Layer 0 visibility buffer (Layer0, Both).
     pub vis0: Option<&'a wgpu::Buffer>,
     /// Layer 1 visibility buffer (Layer1, Both).
@@ -62,6 +67,13 @@ pub(crate) struct RasterTargets<'a> {
     pub zref: Option<&'a wgpu::Buffer>,
     /// Per-pixel fragment counts (Count).
     pub counts: Option<&'a wgpu::Buffer>,
+}
+
+impl<'a> Draw<'a> {
+    /// A step drawn with `frame` in `mode`, its targets to be set.
+    pub(crate) fn new(frame: &'a wgpu::Buffer, mode: RasterMode) -> Self {
+        Draw { frame, mode, vis0: None, vis1: None, zref: None, counts: None }
+    }
 }
 
 /// The rasterizer: its atomic path, bins, counters and indirect arguments.
@@ -99,19 +111,16 @@ impl Rasterizer {
         }
     }
 
-    /// Records one raster step (both phases on the 32-bit path) drawn with the camera of
-    /// `frame` into `t`.
-    #[expect(clippy::too_many_arguments, reason = "the device, the pass, and what it draws")]
+    /// Records one raster step (both phases on the 32-bit path) of `scene`.
     pub(crate) fn draw(
         &self,
         device: &wgpu::Device,
         pipelines: &Pipelines,
         pass: &mut wgpu::ComputePass<'_>,
         scene: &SceneBuffers,
-        frame: &wgpu::Buffer,
-        mode: RasterMode,
-        t: RasterTargets<'_>,
+        t: Draw<'_>,
     ) {
+        let (frame, mode) = (t.frame, t.mode);
         let phases: &[bool] =
             if self.int64 || mode == RasterMode::Count { &[false] } else { &[true, false] };
         let b = scene.buffers();
@@ -235,7 +244,8 @@ impl Stage for RasterStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         let mut pass = rec.pass(id);
         let (vis0, vis1) = (self.vis0(), &self.vis1);
-        let (mode, t) = match id {
+        let draw = |mode| Draw::new(ctx.frame, mode);
+        let step = match id {
             PassId::RasterClear => {
                 self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis0);
                 if ctx.plan.layers == 2 {
@@ -243,25 +253,21 @@ impl Stage for RasterStage {
                 }
                 return;
             }
-            PassId::RasterLayer0 => {
-                (RasterMode::Layer0, RasterTargets { vis0: Some(vis0), ..Default::default() })
+            PassId::RasterLayer0 => Draw { vis0: Some(vis0), ..draw(RasterMode::Layer0) },
+            PassId::RasterLayer1 => {
+                Draw { vis1: Some(vis1), zref: Some(vis0), ..draw(RasterMode::Layer1) }
             }
-            PassId::RasterLayer1 => (
-                RasterMode::Layer1,
-                RasterTargets { vis1: Some(vis1), zref: Some(vis0), ..Default::default() },
-            ),
-            PassId::RasterLayers => (
-                RasterMode::Both { reproject: ctx.settings.layer1 == Layer1Variant::Reproject },
-                RasterTargets {
-                    vis0: Some(vis0),
-                    vis1: Some(vis1),
-                    zref: Some(self.previous_vis0()),
-                    counts: None,
-                },
-            ),
+            PassId::RasterLayers => Draw {
+                vis0: Some(vis0),
+                vis1: Some(vis1),
+                zref: Some(self.previous_vis0()),
+                ..draw(RasterMode::Both {
+                    reproject: ctx.settings.layer1 == Layer1Variant::Reproject,
+                })
+            },
             other => unreachable!("{other} is not a raster pass"),
         };
-        self.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, ctx.frame, mode, t);
+        self.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
     }
 }
 
@@ -295,8 +301,8 @@ pub fn coverage_counts(
             label: Some("deep-gbuffer.raster.count"),
             timestamp_writes: None,
         });
-        let targets = RasterTargets { counts: Some(&counts), ..Default::default() };
-        rasterizer.draw(device, &pipelines, &mut pass, scene, &uniform, RasterMode::Count, targets);
+        let step = Draw { counts: Some(&counts), ..Draw::new(&uniform, RasterMode::Count) };
+        rasterizer.draw(device, &pipelines, &mut pass, scene, step);
     }
     queue.submit([encoder.finish()]);
     let bytes = gpu::read_buffer(device, queue, &counts)?;

@@ -4,7 +4,7 @@
 
 use super::direct::ShadowInputs;
 use super::fill::Fill;
-use super::raster::{RasterMode, RasterTargets};
+use super::raster::{Draw, RasterMode};
 use super::{FrameContext, Recorder, Stage};
 use crate::frame::{FrameUniform, ShadowFace, light_faces};
 use crate::gpu;
@@ -152,16 +152,11 @@ impl Stage for ShadowStage {
             for face in faces.clone() {
                 let vis = &self.face_vis[face];
                 self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis);
-                let targets = RasterTargets { vis0: Some(vis), ..Default::default() };
-                ctx.raster.rasterizer.draw(
-                    ctx.device,
-                    ctx.pipelines,
-                    &mut pass,
-                    ctx.scene,
-                    &self.face_uniforms[face],
-                    RasterMode::Layer0,
-                    targets,
-                );
+                let step = Draw {
+                    vis0: Some(vis),
+                    ..Draw::new(&self.face_uniforms[face], RasterMode::Layer0)
+                };
+                ctx.raster.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
             }
         }
         for face in faces {
