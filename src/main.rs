@@ -548,7 +548,12 @@ fn scene_and_camera(
     scene.ensure_lights();
     let mut cam = scene.camera_or_default();
     if let Some(spec) = camera {
+        let near_given = spec.split(',').any(|t| t.trim().starts_with("near="));
         apply_camera(&mut cam, spec)?;
+        // A moved camera keeps no near plane that would cut what it now sees.
+        if !near_given && let Projection::Perspective { near, .. } = &mut cam.projection {
+            *near = near.min(scene.near_plane_from(cam.eye));
+        }
     }
     Ok((scene, cam))
 }

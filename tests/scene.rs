@@ -500,3 +500,19 @@ fn degenerate_cameras_say_why() {
     }
     camera.validate().unwrap();
 }
+
+/// A camera moved close to (or into) the scene gets a near plane that cuts none of it.
+#[test]
+fn the_near_plane_follows_the_eye() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let (lo, hi) = scene.bounds().unwrap();
+    let framing = scene.framing_camera();
+    let deep_gbuffer::Projection::Perspective { near, .. } = framing.projection else {
+        panic!("perspective")
+    };
+    let inside = (lo + hi) * 0.5;
+    assert!(scene.near_plane_from(inside) < near * 1e-2);
+    assert!(scene.near_plane_from(inside) > 0.0);
+    let above = Vec3::new(inside.x, hi.y + 2.0, inside.z);
+    assert!((scene.near_plane_from(above) - 1.0).abs() < 1e-5, "half the way to the bounds");
+}

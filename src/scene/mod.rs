@@ -337,6 +337,16 @@ impl Scene {
         )
     }
 
+    /// A near plane for a camera at `eye` that cuts nothing of the scene: half the distance from
+    /// `eye` to the scene's bounds, and a ten-thousandth of their size when `eye` is inside them
+    /// (the G-buffer keeps linear view depth, so a small near plane costs no precision).
+    pub fn near_plane_from(&self, eye: Vec3) -> f32 {
+        let (lo, hi) = self.bounds().unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        let floor = ((hi - lo).length() * 1e-4).max(1e-6);
+        let outside = (lo - eye).max(eye - hi).max(Vec3::ZERO).length();
+        (outside * 0.5).max(floor)
+    }
+
     /// The scene's camera, or one that frames its bounds.
     pub fn camera_or_default(&self) -> Camera {
         self.camera.clone().unwrap_or_else(|| self.framing_camera())
