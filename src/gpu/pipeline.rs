@@ -205,9 +205,13 @@ impl Pipeline {
         group: &wgpu::BindGroup,
         groups: (u32, u32),
     ) {
+        self.set(pass, group);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+
+    fn set(&self, pass: &mut wgpu::ComputePass<'_>, group: &wgpu::BindGroup) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
     }
 
     /// Binds `buffers` and dispatches one 8x8 workgroup per 8x8 pixels of `size` (every
@@ -231,9 +235,7 @@ impl Pipeline {
         args: &wgpu::Buffer,
         offset: u64,
     ) {
-        let group = self.bind(device, buffers);
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        self.set(pass, &self.bind(device, buffers));
         pass.dispatch_workgroups_indirect(args, offset);
     }
 

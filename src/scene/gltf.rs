@@ -259,13 +259,19 @@ fn load_image(
             }
         },
     };
-    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+    decode_texture(&bytes, texels_left)
+}
+
+/// Decodes an encoded image (PNG or JPEG) as an sRGB RGBA8 texture once its header's size is
+/// checked against `MAX_TEXTURE_SIDE` and taken from `texels_left`.
+fn decode_texture(bytes: &[u8], texels_left: &mut u64) -> std::result::Result<Texture, String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let (w, h) = reader.into_dimensions().map_err(|e| format!("image header: {e}"))?;
     check_side(w, h)?;
     take_texels(w, h, texels_left)?;
-    let decoded = image::load_from_memory(&bytes).map_err(|e| e.to_string())?;
+    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
     let rgba = decoded.to_rgba8();
     Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
 }
@@ -285,19 +291,10 @@ fn take_texels(w: u32, h: u32, texels_left: &mut u64) -> std::result::Result<(),
 /// Loads an image file (PNG or JPEG) as an sRGB RGBA8 texture, refusing oversized images and
 /// images over what is left of the texel budget, from the header, before decoding.
 pub(crate) fn load_texture_file(path: &Path, texels_left: &mut u64) -> Result<Texture> {
-    let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = reader.with_guessed_format().map_err(|e| Error::io(path, e))?;
-    let (w, h) =
-        reader.into_dimensions().map_err(|e| Error::format(path, "image header", e.to_string()))?;
-    check_side(w, h).map_err(|m| Error::format(path, "image", m))?;
-    take_texels(w, h, texels_left).map_err(|m| Error::format(path, "image", m))?;
-    let img = image::open(path).map_err(|e| Error::format(path, "image", e.to_string()))?;
-    let rgba = img.to_rgba8();
-    Ok(Texture { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_texture(&bytes, texels_left).map_err(|m| Error::format(path, "image", m))
 }
 
-/// Checks the mesh references the `gltf` crate's validation may index without checking
-/// (attribute, index and material ids), so the error names the exact place.
 /// A glTF URI is followed only if it is embedded data (`data:`) or a relative path that stays
 /// inside the scene's folder: network addresses, other schemes, absolute paths and paths that
 /// climb out with `..` (also percent-encoded) are refused before anything is read.

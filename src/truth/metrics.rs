@@ -54,14 +54,6 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
     }
 }
 
-/// The irradiance the composite takes from the radiosity pass: confidence (alpha) times E (rgb),
-/// of the first `n` pixels of its `vec4` buffer. The rest of the hemisphere, which no tap
-/// covered, is the ambient term's; the ground truth of diffuse indirect light leaves the sky out
-/// in the same way.
-pub fn weighted_irradiance(values: &[f32], n: usize) -> Vec<Vec3> {
-    values.chunks_exact(4).take(n).map(|c| Vec3::new(c[0], c[1], c[2]) * c[3]).collect()
-}
-
 /// Structural similarity (SSIM) of two images as a viewer sees them: both tone-mapped with
 /// `exposure` ([`crate::output::tonemap`]), their luminance (Rec. 709 weights) quantised to
 /// 8 bits, then the mean SSIM over 8x8 windows of the `image-compare` crate (1: identical).
