@@ -382,39 +382,6 @@ fn precheck(path: &Path, limits: &Limits) -> Result<()> {
         }
     }
     check_document(&doc, limits).map_err(|(at, m)| Error::format(path, at, m))?;
-    let count = |key: &str| doc.get(key).and_then(|v| v.as_array()).map_or(0, Vec::len) as u64;
-    let (accessors, materials) = (count("accessors"), count("materials"));
-    let meshes = doc.get("meshes").and_then(|m| m.as_array()).cloned().unwrap_or_default();
-    for (m, mesh) in meshes.iter().enumerate() {
-        let prims = mesh.get("primitives").and_then(|p| p.as_array()).cloned().unwrap_or_default();
-        for (p, prim) in prims.iter().enumerate() {
-            let at = |what: &str| format!("meshes[{m}].primitives[{p}].{what}");
-            let mut refs: Vec<(String, &serde_json::Value, u64)> = Vec::new();
-            if let Some(attrs) = prim.get("attributes").and_then(|a| a.as_object()) {
-                refs.extend(
-                    attrs.iter().map(|(k, v)| (at(&format!("attributes.{k}")), v, accessors)),
-                );
-            }
-            if let Some(v) = prim.get("indices") {
-                refs.push((at("indices"), v, accessors));
-            }
-            if let Some(v) = prim.get("material") {
-                refs.push((at("material"), v, materials));
-            }
-            for (location, value, len) in refs {
-                match value.as_u64() {
-                    Some(i) if i < len => {}
-                    _ => {
-                        return Err(Error::format(
-                            path,
-                            location,
-                            format!("index {value} out of range (there are {len})"),
-                        ));
-                    }
-                }
-            }
-        }
-    }
     Ok(())
 }
 
@@ -522,18 +489,37 @@ fn check_document(
         }
         Ok(())
     };
+    let materials = list(doc, "materials").len() as u64;
     for (m, mesh) in list(doc, "meshes").iter().enumerate() {
         for (p, prim) in list(mesh, "primitives").iter().enumerate() {
             let at = format!("meshes[{m}].primitives[{p}]");
+            // (semantic, the index, how many there are): attributes and indices name
+            // accessors, checked as the loader reads them; the material only by range.
+            let mut refs: Vec<(String, &serde_json::Value, u64)> = Vec::new();
             if let Some(attrs) = prim.get("attributes").and_then(|a| a.as_object()) {
-                for (semantic, v) in attrs {
-                    if let Some(a) = v.as_u64() {
-                        check_accessor(a, semantic).map_err(|e| (at.clone(), e))?;
-                    }
-                }
+                refs.extend(attrs.iter().map(|(k, v)| (k.clone(), v, accessors.len() as u64)));
             }
-            if let Some(a) = prim.get("indices").and_then(serde_json::Value::as_u64) {
-                check_accessor(a, "indices").map_err(|e| (at.clone(), e))?;
+            if let Some(v) = prim.get("indices") {
+                refs.push(("indices".into(), v, accessors.len() as u64));
+            }
+            if let Some(v) = prim.get("material") {
+                refs.push(("material".into(), v, materials));
+            }
+            for (semantic, value, len) in refs {
+                let field = if matches!(semantic.as_str(), "indices" | "material") {
+                    semantic.clone()
+                } else {
+                    format!("attributes.{semantic}")
+                };
+                let index = value.as_u64().filter(|i| *i < len).ok_or_else(|| {
+                    (
+                        format!("{at}.{field}"),
+                        format!("index {value} out of range (there are {len})"),
+                    )
+                })?;
+                if semantic != "material" {
+                    check_accessor(index, &semantic).map_err(|e| (at.clone(), e))?;
+                }
             }
         }
     }
