@@ -75,20 +75,39 @@ fn the_check_finds_mismatches() {
     assert!(check(&larger).unwrap_err().contains("bytes"));
 }
 
+/// The value of the WGSL constant `name` in `module`.
+fn constant(module: &naga::Module, name: &str) -> naga::Literal {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no constant {name}"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(literal) => literal,
+        ref other => panic!("{name} = {other:?}"),
+    }
+}
+
 #[test]
 fn raster_counter_words_match_the_shader() {
     let module = module("raster.wgsl");
-    let word = |name: &str| -> usize {
-        let (_, c) =
-            module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).unwrap();
-        match module.global_expressions[c.init] {
-            naga::Expression::Literal(naga::Literal::U32(v)) => v as usize,
-            ref other => panic!("{name} = {other:?}"),
-        }
+    let word = |name: &str| match constant(&module, name) {
+        naga::Literal::U32(v) => v as usize,
+        other => panic!("{name} = {other:?}"),
     };
     let at = |offset: usize| offset / 4;
     assert_eq!(at(std::mem::offset_of!(RasterCounters, rejected_indices)), word("DIAG_INDEX"));
     assert_eq!(at(std::mem::offset_of!(RasterCounters, rejected_materials)), word("DIAG_MATERIAL"));
     assert_eq!(at(std::mem::offset_of!(RasterCounters, rejected_positions)), word("DIAG_POSITION"));
     assert_eq!(at(std::mem::offset_of!(RasterCounters, untextured)), word("DIAG_TEXTURE"));
+}
+
+/// The resolve bounds the host's (unchecked) emission by the limit the CPU checks scenes against.
+#[test]
+fn radiance_bound_matches_the_shader() {
+    let module = module("resolve.wgsl");
+    assert_eq!(
+        constant(&module, "MAX_RADIANCE"),
+        naga::Literal::F32(deep_gbuffer::scene::MAX_RADIANCE)
+    );
 }

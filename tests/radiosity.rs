@@ -155,7 +155,7 @@ fn a_static_camera_converges_and_a_cut_resets() {
 }
 
 /// A material with a NaN emission (possible only through imported buffers, which the CPU does not
-/// check) must not poison the history: after many frames no output or history value is NaN.
+/// check) must not poison the history: after many frames no output, history or image value is NaN.
 #[test]
 fn nan_input_never_enters_the_history() {
     let g = gpu();
@@ -196,21 +196,10 @@ fn nan_input_never_enters_the_history() {
         let values = read4(&renderer, buffer);
         assert!(values.iter().all(|v| v.is_finite()), "{name} holds a non-finite value");
     }
+    // The resolve reads a NaN emission as 0 and an infinite one as MAX_RADIANCE: the image is
+    // finite everywhere, where the material is seen too.
     let hdr = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer()).unwrap();
-    let bad = hdr.iter().filter(|c| !c.is_finite()).count();
-    // The NaN emission shows only where that material is seen directly (the composite adds it);
-    // it spreads nowhere else.
-    let direct_material_pixels = renderer
-        .read_gbuffer(&g.device, &g.queue, 0)
-        .unwrap()
-        .samples
-        .iter()
-        .filter(|s| s.depth > 0.0 && s.material == 0)
-        .count();
-    assert!(
-        bad <= direct_material_pixels,
-        "{bad} non-finite pixels, {direct_material_pixels} showing the material"
-    );
+    assert!(hdr.iter().all(|c| c.is_finite()), "the image holds a non-finite value");
 }
 
 /// Energy conservation: inside a closed box whose walls all emit Le and reflect rho, the true

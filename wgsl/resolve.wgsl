@@ -150,11 +150,11 @@ fn shade(pixel: vec2<u32>) -> GSample {
                 base *= sample_texture(m, uv);
             }
         }
-        s.base_color = clamp(base, vec3<f32>(0.0), vec3<f32>(1.0));
-        s.roughness = clamp(m.roughness, 0.0, 1.0);
-        s.metallic = clamp(m.metallic, 0.0, 1.0);
-        s.reflectivity = clamp(m.reflectivity, 0.0, 1.0);
-        s.emissive = max(m.emissive, vec3<f32>(0.0));
+        s.base_color = bounded(base, 1.0);
+        s.roughness = unit(m.roughness);
+        s.metallic = unit(m.metallic);
+        s.reflectivity = unit(m.reflectivity);
+        s.emissive = bounded(m.emissive, MAX_RADIANCE);
     }
     // Motion: where this point was on screen in the previous frame (static geometry).
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(world, 1.0));

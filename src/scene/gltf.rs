@@ -16,14 +16,36 @@ use super::{
 };
 use crate::{Error, Result};
 
+thread_local! {
+    /// Set while this thread runs [`catch_quietly`]'s closure.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f`, catching a panic as an error value without the panic hook printing it. The hook
+/// is wrapped once per process: the wrapper stays silent on a thread inside `catch_quietly` and
+/// hands every other panic to the hook that was installed before it.
+fn catch_quietly<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
+    static WRAP: std::sync::Once = std::sync::Once::new();
+    WRAP.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(false));
+    result
+}
+
 /// Loads a `.gltf` or `.glb` file with its buffers and images.
 pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
     precheck(path, limits)?;
-    // The `gltf` crate's validation can panic on some out-of-range indices; that is a malformed
-    // file, not a crash.
     // The checks above cover what the `gltf` crate's validation and readers are known to panic
     // on; a panic left is a malformed file, not a crash.
-    let opened = std::panic::catch_unwind(|| gltf::Gltf::open(path)).map_err(|panic| {
+    let opened = catch_quietly(|| gltf::Gltf::open(path)).map_err(|panic| {
         let message = panic
             .downcast_ref::<String>()
             .cloned()
@@ -613,4 +635,31 @@ fn check_nodes(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// Run in a child process of the test binary (the panic hook is process-wide): a panic
+    /// caught by `catch_quietly` prints nothing, and a later uncaught panic on another thread
+    /// still reaches the hook that was installed before.
+    #[test]
+    fn a_caught_panic_is_not_printed() {
+        const CHILD: &str = "DEEP_GBUFFER_QUIET_PANIC_CHILD";
+        if std::env::var_os(CHILD).is_some() {
+            let caught = super::catch_quietly(|| panic!("caught quietly"));
+            assert!(caught.is_err());
+            let loud = std::thread::spawn(|| panic!("printed as usual")).join();
+            assert!(loud.is_err());
+            return;
+        }
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", "scene::gltf::tests::a_caught_panic_is_not_printed", "--nocapture"])
+            .env(CHILD, "1")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(!stderr.contains("caught quietly"), "{stderr}");
+        assert!(stderr.contains("printed as usual"), "{stderr}");
+    }
 }
