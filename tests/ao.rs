@@ -2,7 +2,9 @@
 
 mod common;
 
-use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, render, shade_fixture, soup};
+use common::{
+    GBUFFER_FIXTURES, assert_few_differ, corner, corner_surface, gpu, render, shade_fixture, soup,
+};
 use deep_gbuffer::cpu::{ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid};
 use deep_gbuffer::frame::PyramidLayout;
 use deep_gbuffer::{AoSettings, Camera, Scene, Settings};
@@ -131,12 +133,7 @@ fn invalid_obscurance_settings_are_refused() {
 #[test]
 fn a_right_angle_corner_matches_the_closed_form() {
     let size = 4.0;
-    let floor = [Vec3::ZERO, Vec3::new(0.0, 0.0, size), Vec3::new(size, 0.0, size)];
-    let floor2 = [Vec3::ZERO, Vec3::new(size, 0.0, size), Vec3::new(size, 0.0, 0.0)];
-    let wall = [Vec3::ZERO, Vec3::new(0.0, size, 0.0), Vec3::new(0.0, size, size)];
-    let wall2 = [Vec3::ZERO, Vec3::new(0.0, size, size), Vec3::new(0.0, 0.0, size)];
-    let mut scene = soup(&[floor, floor2, wall, wall2], true);
-    scene.ambient = Vec3::splat(0.2);
+    let scene = corner(size);
     let camera = Camera::perspective(Vec3::new(2.5, 1.5, 3.5), Vec3::new(0.0, 0.2, 1.5), 60.0, 0.1);
     let ao = AoSettings { radius: 0.6, samples: 16, two_layers: false, ..Default::default() };
     let (w, h) = (64, 48);
@@ -145,26 +142,8 @@ fn a_right_angle_corner_matches_the_closed_form() {
     let f = &r.frame;
 
     // The exact surface at every pixel centre.
-    let exact: Vec<deep_gbuffer::GSample> = (0..w * h)
-        .map(|p| {
-            let px = glam::Vec2::new((p % w) as f32 + 0.5, (p / w) as f32 + 0.5);
-            let to_world =
-                |v: Vec3| glam::Mat4::from_cols_array_2d(&f.inv_view).transform_point3(v);
-            let eye = to_world(Vec3::ZERO);
-            // The point at view depth 1 on this pixel's ray: a point at depth d is eye + d dir.
-            let dir = to_world(cpu_ao::view_position(f, px, 1.0)) - eye;
-            let mut best = deep_gbuffer::GSample::default();
-            for (axis, normal) in [(1, Vec3::Y), (0, Vec3::X)] {
-                let d = -eye[axis] / dir[axis];
-                let hit = eye + d * dir;
-                let inside = (0..3).all(|a| a == axis || (0.0..=size).contains(&hit[a]));
-                if d > 0.0 && inside && (best.depth == 0.0 || d < best.depth) {
-                    best = deep_gbuffer::GSample { depth: d, normal, ..Default::default() };
-                }
-            }
-            best
-        })
-        .collect();
+    let exact: Vec<deep_gbuffer::GSample> =
+        corner_surface(f, size).into_iter().map(|(s, _)| s).collect();
     let layout = PyramidLayout::new(w, h);
     let depth: Vec<f32> = exact.iter().map(|s| s.depth).collect();
     let expected =

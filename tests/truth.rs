@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{gpu, soup};
+use common::{corner, corner_obscurance, corner_surface, gpu, soup};
 use deep_gbuffer::truth::{Shot, Tracer, metrics};
 use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
@@ -76,6 +76,65 @@ fn obscurance_under_a_ceiling_has_the_closed_form() {
     assert!(image.visible.iter().filter(|v| **v).count() > 10);
     let seen = image.value.iter().zip(&image.visible).filter(|(_, v)| **v);
     assert!(seen.clone().all(|(v, _)| v.x == 1.0), "an open plane is unobscured");
+}
+
+/// A right-angle corner against its closed form (`common::corner_obscurance`), every visible
+/// pixel, the crease included: a point on the crease lies on both planes, and a secondary ray
+/// that started inside the neighbouring plane would see it at distance 0 (AV 0) or not at all
+/// (AV 1) where the truth is 1/2.
+#[test]
+fn obscurance_in_a_right_angle_corner_has_the_closed_form() {
+    let size = 4.0;
+    let scene = corner(size);
+    // Up along the crease, the target on it, an odd width: the crease projects onto the middle
+    // column of pixel centres, whose rays meet it exactly.
+    let camera = Camera {
+        up: Vec3::Z,
+        ..Camera::perspective(Vec3::new(2.0, 2.0, 0.5), Vec3::new(0.0, 0.0, 2.0), 60.0, 0.1)
+    };
+    let r = 0.6;
+    let ao = AoSettings { radius: r, ..Default::default() };
+    let shot = Shot { camera: &camera, size: (63, 47), spp: 256, seed: 11 };
+    let image =
+        Tracer::new(&scene).unwrap().ambient_obscurance(&scene, &shot, &ao, &|| ()).unwrap();
+    let surface = corner_surface(&shot.frame().unwrap(), size);
+    // Per pixel, and per band of distance (0.05 wide), where the means of a few hundred pixels
+    // test far more tightly than one pixel can: rare hits at large distances make a pixel's own
+    // standard error unreliable.
+    let mut bands = [(0.0f64, 0.0f64, 0.0f64, 0usize); 12];
+    let mut at_crease = 0;
+    for (p, (s, point)) in surface.iter().enumerate() {
+        // The closed form is for infinite planes: no point within r of the corner's ends.
+        if s.depth <= 0.0 || !image.visible[p] || !(r..=size - r).contains(&point.z) {
+            continue;
+        }
+        // Distance to the other plane: the floor point's x, the wall point's y.
+        let x = if s.normal == Vec3::Y { point.x } else { point.y };
+        let expected = 1.0 - corner_obscurance(x, r);
+        let (v, se) = (image.value[p].x, image.stderr[p].x);
+        assert!(
+            (v - expected).abs() <= 6.0 * se + 0.03,
+            "pixel {p}, {x} from the crease: {v} against {expected} (standard error {se})"
+        );
+        at_crease += usize::from(x < 1e-3);
+        let band = &mut bands[((x / 0.05) as usize).min(11)];
+        *band = (
+            band.0 + f64::from(v),
+            band.1 + f64::from(expected),
+            band.2 + f64::from(se * se),
+            band.3 + 1,
+        );
+    }
+    for (i, &(v, e, var, n)) in bands.iter().enumerate() {
+        let n_f = n as f64;
+        let (v, e, se) = (v / n_f, e / n_f, var.sqrt() / n_f);
+        assert!(n > 20, "band {i}: {n} pixels");
+        assert!(
+            (v - e).abs() <= 4.0 * se + 1e-3,
+            "band {i} ({n} pixels): {v} against {e} (se {se})"
+        );
+    }
+    assert!(at_crease >= 20, "{at_crease} pixels on the crease");
 }
 
 #[test]

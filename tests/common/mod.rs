@@ -164,3 +164,58 @@ pub fn assert_few_differ<T>(
         fraction * 100.0
     );
 }
+
+/// A right-angle corner: a floor y = 0 and a wall x = 0, each `size` a side, meeting along the
+/// z axis from z = 0 to z = size.
+pub fn corner(size: f32) -> Scene {
+    let floor = [Vec3::ZERO, Vec3::new(0.0, 0.0, size), Vec3::new(size, 0.0, size)];
+    let floor2 = [Vec3::ZERO, Vec3::new(size, 0.0, size), Vec3::new(size, 0.0, 0.0)];
+    let wall = [Vec3::ZERO, Vec3::new(0.0, size, 0.0), Vec3::new(0.0, size, size)];
+    let wall2 = [Vec3::ZERO, Vec3::new(0.0, size, size), Vec3::new(0.0, 0.0, size)];
+    let mut scene = soup(&[floor, floor2, wall, wall2], true);
+    scene.ambient = Vec3::splat(0.2);
+    scene
+}
+
+/// The exact surface of [`corner`] at every pixel centre of frame `f`: view depth and normal
+/// (from intersecting the pixel's ray with the two planes), and the world point; depth 0 where
+/// the ray misses.
+pub fn corner_surface(f: &FrameUniform, size: f32) -> Vec<(deep_gbuffer::GSample, Vec3)> {
+    let to_world = |v: Vec3| glam::Mat4::from_cols_array_2d(&f.inv_view).transform_point3(v);
+    (0..f.width * f.height)
+        .map(|p| {
+            let px = glam::Vec2::new((p % f.width) as f32 + 0.5, (p / f.width) as f32 + 0.5);
+            let eye = to_world(Vec3::ZERO);
+            // The point at view depth 1 on this pixel's ray: a point at depth d is eye + d dir.
+            let dir = to_world(deep_gbuffer::cpu::ao::view_position(f, px, 1.0)) - eye;
+            let mut best = (deep_gbuffer::GSample::default(), Vec3::ZERO);
+            for (axis, normal) in [(1, Vec3::Y), (0, Vec3::X)] {
+                let d = -eye[axis] / dir[axis];
+                let hit = eye + d * dir;
+                let inside = (0..3).all(|a| a == axis || (0.0..=size).contains(&hit[a]));
+                if d > 0.0 && inside && (best.0.depth == 0.0 || d < best.0.depth) {
+                    best = (deep_gbuffer::GSample { depth: d, normal, ..Default::default() }, hit);
+                }
+            }
+            best
+        })
+        .collect()
+}
+
+/// Obscurance `(1/pi) integral max(1 - d^2/r^2, 0) cos(theta) dw` of a point at distance `x`
+/// from an infinite wall perpendicular to its own (infinite) plane, for radius `r`. With the
+/// polar axis towards the wall, a = cos(alpha), the wall is hit at d = x / a, and the cosine to
+/// the normal integrates over the half circle to 2 sin(alpha), so with u = x / r and
+/// A = acos(u):
+///     O = (2/pi) integral_0^A sin^2(alpha) (1 - u^2 / cos^2(alpha)) d alpha
+///       = (2/pi) (A/2 - sin(2A)/4 - u^2 (tan A - A)).
+/// At the crease (u = 0) it is 1/2: the wall fills half the hemisphere at distance 0.
+pub fn corner_obscurance(x: f32, r: f32) -> f32 {
+    let u = (x / r) as f64;
+    if u >= 1.0 {
+        return 0.0;
+    }
+    let a = u.acos();
+    let o = std::f64::consts::FRAC_2_PI * (a / 2.0 - (2.0 * a).sin() / 4.0 - u * u * (a.tan() - a));
+    o as f32
+}
