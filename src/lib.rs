@@ -60,6 +60,6 @@ pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
 pub use settings::{
-    AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision, Preset,
-    RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
+    AoEstimator, AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision,
+    Preset, RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
 };

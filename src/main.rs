@@ -7,9 +7,9 @@ use clap::{Parser, Subcommand};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
-    AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error, Layer1Variant,
-    Normalization, PassId, Precision, Preset, RadiositySettings, Renderer, Result, Scene,
-    SceneBuffers, Settings, output,
+    AoEstimator, AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error,
+    Layer1Variant, Normalization, PassId, Precision, Preset, RadiositySettings, Renderer, Result,
+    Scene, SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -88,7 +88,13 @@ struct SweepArgs {
     /// Rays per pixel of the ground truth.
     #[arg(long, default_value_t = 256)]
     spp: u32,
-    /// Obscurance tap counts to sweep (comma separated).
+    /// Obscurance estimators to sweep (comma separated).
+    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().ao_estimator)]
+    ao_estimator: Vec<AoEstimator>,
+    /// Obscurance slice counts to sweep (horizon, bitmask).
+    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().ao_slices)]
+    ao_slices: Vec<u32>,
+    /// Obscurance tap counts to sweep.
     #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().ao_samples)]
     ao_samples: Vec<u32>,
     /// Radiosity tap counts to sweep.
@@ -173,15 +179,52 @@ struct TruthArgs {
     /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
     #[arg(long, default_value_t = 1)]
     frames: u32,
-    /// Obscurance radius in scene units.
-    #[arg(long, default_value_t = AoSettings::default().radius)]
-    ao_radius: f32,
-    /// Obscurance taps per pixel of the GPU estimate (with --compare).
-    #[arg(long, default_value_t = AoSettings::default().samples)]
-    ao_samples: u32,
+    /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
+    #[command(flatten)]
+    ao: AoArgs,
     /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
     #[arg(long)]
     compare: bool,
+}
+
+/// The obscurance's settings (render, and truth's GPU estimate). Those not given keep the
+/// default's (or the preset's) value.
+#[derive(clap::Args)]
+struct AoArgs {
+    /// Obscurance estimator (see `wgsl/ao.wgsl`) [default: bitmask, or the preset's].
+    #[arg(long, value_enum)]
+    ao_estimator: Option<AoEstimator>,
+    /// Obscurance radius in scene units.
+    #[arg(long, default_value_t = AoSettings::default().radius)]
+    ao_radius: f32,
+    /// Obscurance taps per pixel [default: 32, or the preset's].
+    #[arg(long)]
+    ao_samples: Option<u32>,
+    /// Slices per pixel of the horizon and bitmask estimators, their taps shared among them
+    /// [default: 2, or the preset's].
+    #[arg(long)]
+    ao_slices: Option<u32>,
+    /// How far an occluder reaches behind its visible surface, as a fraction of the radius
+    /// (bitmask) [default: 0.75].
+    #[arg(long)]
+    ao_thickness: Option<f32>,
+    /// Obscurance from layer 0 only (to compare with the two-layer estimator).
+    #[arg(long)]
+    ao_one_layer: bool,
+}
+
+impl AoArgs {
+    /// Sets what was given on `ao`.
+    fn apply(&self, ao: &mut AoSettings) {
+        ao.radius = self.ao_radius;
+        ao.estimator = self.ao_estimator.unwrap_or(ao.estimator);
+        ao.samples = self.ao_samples.unwrap_or(ao.samples);
+        ao.slices = self.ao_slices.unwrap_or(ao.slices);
+        ao.thickness = self.ao_thickness.unwrap_or(ao.thickness);
+        if self.ao_one_layer {
+            ao.two_layers = false;
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -247,15 +290,8 @@ struct RenderArgs {
     /// Turn ambient obscurance off.
     #[arg(long)]
     no_ao: bool,
-    /// Obscurance radius in scene units.
-    #[arg(long, default_value_t = AoSettings::default().radius)]
-    ao_radius: f32,
-    /// Obscurance taps per pixel (default: 11, or the preset's).
-    #[arg(long)]
-    ao_samples: Option<u32>,
-    /// Obscurance from layer 0 only (to compare with the two-layer estimator).
-    #[arg(long)]
-    ao_one_layer: bool,
+    #[command(flatten)]
+    ao: AoArgs,
     /// Radiosity gather radius in scene units.
     #[arg(long, default_value_t = RadiositySettings::default().radius)]
     radiosity_radius: f32,
@@ -345,8 +381,8 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
 
 fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let (w, h) = args.size;
-    let ao =
-        AoSettings { radius: args.ao_radius, samples: args.ao_samples, ..AoSettings::default() };
+    let mut ao = AoSettings::default();
+    args.ao.apply(&mut ao);
     ao.validate()?;
     let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
@@ -473,6 +509,8 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     use deep_gbuffer::sweep;
     let (w, h) = args.size;
     let grid = sweep::Grid {
+        ao_estimator: args.ao_estimator,
+        ao_slices: args.ao_slices,
         ao_samples: args.ao_samples,
         radiosity_samples: args.radiosity_samples,
         layers: args.layers,
@@ -608,7 +646,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         dz: args.dz,
         layer1: args.layer1,
         atomics: args.atomics,
-        ao: AoSettings { enabled: !args.no_ao, radius: args.ao_radius, ..AoSettings::default() },
+        ao: AoSettings { enabled: !args.no_ao, ..AoSettings::default() },
         radiosity: RadiositySettings {
             radius: args.radiosity_radius,
             normalization: args.normalization,
@@ -625,14 +663,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     if let Some(p) = args.precision {
         settings.precision = p;
     }
-    if let Some(n) = args.ao_samples {
-        settings.ao.samples = n;
-    }
+    args.ao.apply(&mut settings.ao);
     if let Some(n) = args.radiosity_samples {
         settings.radiosity.samples = n;
-    }
-    if args.ao_one_layer {
-        settings.ao.two_layers = false;
     }
     settings.validate()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {

@@ -44,37 +44,62 @@ impl Precision {
     }
 }
 
+/// How the obscurance pass estimates `1 - (1/pi) integral max(1 - d^2/r^2, 0) cos(theta) dw`
+/// (`wgsl/ao.wgsl`, documented there).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
+pub enum AoEstimator {
+    /// Scalable Ambient Obscurance's sum over spiral taps (each layer's larger term), with its
+    /// normalisation `2 / N`: biased low in creases and contacts whatever the tap count.
+    Sao,
+    /// Slices through the view direction, each marching the depth pyramid on both sides; every
+    /// surface seen is a height field (solid behind it). The cosine-weighted arc each tap hides
+    /// is counted once, at the falloff of the first surface that hides it, in closed form: the
+    /// estimate converges to the integral as slices and steps grow wherever the scene is a
+    /// height field.
+    Horizon,
+    /// As `horizon`, but a surface is solid only `thickness` behind itself, and no deeper than
+    /// the next layer's surface at that pixel, which is solid behind itself in turn: thin
+    /// objects in front of others stop hiding them.
+    #[default]
+    Bitmask,
+}
+
 /// Named accuracy levels, chosen from the Pareto fronts that `deep-gbuffer sweep` measured on the
-/// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance and radiosity tap
-/// counts, the number of layers the effects read and the G-buffer encoding (full: the packed
-/// encoding measured no faster on lavapipe; it halves the G-buffer's memory); the rest stays as
-/// given.
+/// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance's estimator, taps and
+/// slices, the radiosity's taps, the number of layers the effects read and the G-buffer encoding
+/// (full: the packed encoding measured no faster on lavapipe; it halves the G-buffer's memory);
+/// the rest stays as given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[derive(serde::Serialize)]
 pub enum Preset {
-    /// 4 obscurance taps, 5 radiosity taps, layer 0 only: the cheapest point of both fronts.
+    /// `bitmask` obscurance with 8 taps on 1 slice, 5 radiosity taps, layer 0 only: the
+    /// cheapest point of both fronts.
     Low,
-    /// 4 obscurance taps, 9 radiosity taps, both layers: the two-layer point of the obscurance
-    /// front (lowest error there) at little more cost.
+    /// `bitmask` with 16 taps on 1 slice, 9 radiosity taps, both layers.
     Balanced,
-    /// 11 obscurance taps, 19 radiosity taps, both layers: half the radiosity flicker of `low`.
+    /// `bitmask` with 32 taps on 2 slices (the default), 19 radiosity taps, both layers: half
+    /// the radiosity flicker of `low`.
     High,
-    /// 32 obscurance taps, 27 radiosity taps, both layers: the least flicker and the lowest
-    /// radiosity error measured.
+    /// `bitmask` with 64 taps on 2 slices, 27 radiosity taps, both layers: the lowest errors
+    /// and the least flicker measured.
     Ultra,
 }
 
 impl Preset {
     /// Applies the preset's knobs to `settings`.
     pub fn apply(self, settings: &mut Settings) {
-        let (ao, radiosity, layers, precision) = match self {
-            Preset::Low => (4, 5, 1, Precision::Full),
-            Preset::Balanced => (4, 9, 2, Precision::Full),
-            Preset::High => (11, 19, 2, Precision::Full),
-            Preset::Ultra => (32, 27, 2, Precision::Full),
+        let ((ao, slices), radiosity, layers, precision) = match self {
+            Preset::Low => ((8, 1), 5, 1, Precision::Full),
+            Preset::Balanced => ((16, 1), 9, 2, Precision::Full),
+            Preset::High => ((32, 2), 19, 2, Precision::Full),
+            Preset::Ultra => ((64, 2), 27, 2, Precision::Full),
         };
+        settings.ao.estimator = AoEstimator::Bitmask;
         settings.ao.samples = ao;
+        settings.ao.slices = slices;
         settings.ao.two_layers = layers == 2;
         settings.radiosity.samples = radiosity;
         // Two layers where an effect reads them (the plan decides), never forced on a scene
@@ -103,6 +128,14 @@ pub enum AtomicPath {
 pub struct AoSettings {
     /// Run the obscurance passes.
     pub enabled: bool,
+    /// The estimator.
+    pub estimator: AoEstimator,
+    /// Slices per pixel of the `horizon` and `bitmask` estimators (each turned per pixel); their
+    /// `samples` taps are shared among the slices, half on each side. 1 to 16.
+    pub slices: u32,
+    /// How far an occluder reaches behind its visible surface, as a fraction of `radius`
+    /// (`bitmask`): relative, so that it follows the scale the radius is chosen for.
+    pub thickness: f32,
     /// World-space radius of the neighbourhood, in scene units.
     pub radius: f32,
     /// Taps per pixel.
@@ -126,8 +159,11 @@ impl Default for AoSettings {
     fn default() -> Self {
         AoSettings {
             enabled: true,
+            estimator: AoEstimator::default(),
+            slices: 2,
+            thickness: 0.75,
             radius: 0.5,
-            samples: 11,
+            samples: 32,
             bias: 0.01,
             intensity: 1.0,
             two_layers: true,
@@ -162,6 +198,15 @@ impl AoSettings {
             return Err(Error::setting(
                 "ao.intensity",
                 format!("{} (must be finite and >= 0)", self.intensity),
+            ));
+        }
+        if !(1..=16).contains(&self.slices) {
+            return Err(Error::setting("ao.slices", format!("{} (must be 1 to 16)", self.slices)));
+        }
+        if !(self.thickness.is_finite() && self.thickness > 0.0) {
+            return Err(Error::setting(
+                "ao.thickness",
+                format!("{} (must be finite and > 0)", self.thickness),
             ));
         }
         if self.mip_offset > 8 {

@@ -28,7 +28,9 @@ use crate::environment::Environment;
 use crate::gbuffer::GBufferLayer;
 use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
-use crate::settings::{AoSettings, Layer1Variant, Precision, RadiositySettings, Settings};
+use crate::settings::{
+    AoEstimator, AoSettings, Layer1Variant, Precision, RadiositySettings, Settings,
+};
 use crate::truth::metrics::{self, ErrorStats};
 use crate::truth::{Shot, Tracer, TruthImage};
 use crate::{Error, Renderer, Result, SceneBuffers};
@@ -36,6 +38,10 @@ use crate::{Error, Renderer, Result, SceneBuffers};
 /// One configuration of the accuracy knobs.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Knobs {
+    /// Obscurance estimator.
+    pub ao_estimator: AoEstimator,
+    /// Obscurance slices per pixel (`horizon`, `bitmask`).
+    pub ao_slices: u32,
     /// Obscurance taps per pixel.
     pub ao_samples: u32,
     /// Radiosity taps per pixel.
@@ -68,6 +74,8 @@ impl Knobs {
             dz: self.dz,
             layer1: self.layer1,
             ao: AoSettings {
+                estimator: self.ao_estimator,
+                slices: self.ao_slices,
                 samples: self.ao_samples,
                 two_layers: self.layers == 2,
                 mip_offset: self.mip_offset,
@@ -105,6 +113,10 @@ impl Knobs {
 /// The grid a sweep renders: every combination of these values.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
+    /// Obscurance estimators.
+    pub ao_estimator: Vec<AoEstimator>,
+    /// Obscurance slices.
+    pub ao_slices: Vec<u32>,
     /// Obscurance taps.
     pub ao_samples: Vec<u32>,
     /// Radiosity taps.
@@ -129,7 +141,9 @@ impl Default for Grid {
     fn default() -> Self {
         let settings = Settings::default();
         Grid {
-            ao_samples: vec![4, 8, 11, 16, 24, 32],
+            ao_estimator: vec![AoEstimator::Sao, AoEstimator::Bitmask],
+            ao_slices: vec![settings.ao.slices],
+            ao_samples: vec![4, 8, 16, 32, 64],
             radiosity_samples: vec![5, 9, 13, 19, 27],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
@@ -160,6 +174,8 @@ impl Grid {
         }
         let settings = Settings::default();
         let base = Knobs {
+            ao_estimator: settings.ao.estimator,
+            ao_slices: settings.ao.slices,
             ao_samples: settings.ao.samples,
             radiosity_samples: settings.radiosity.samples,
             layers: 2,
@@ -177,6 +193,8 @@ impl Grid {
         let k = times(k, &self.mip_offset, |k, v| k.mip_offset = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
+        let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
+        let k = times(k, &self.ao_slices, |k, v| k.ao_slices = v);
         let k = times(k, &self.ao_samples, |k, v| k.ao_samples = v);
         times(k, &self.radiosity_samples, |k, v| k.radiosity_samples = v)
     }
@@ -445,7 +463,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -466,7 +484,9 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{},{},{},{:?},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{:?},{}",
+            k.ao_estimator,
+            k.ao_slices,
             k.ao_samples,
             k.radiosity_samples,
             k.layers,
@@ -522,7 +542,9 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 6] = [
+    let optional: [Column; 8] = [
+        ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
+        ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
@@ -710,6 +732,7 @@ mod tests {
     #[test]
     fn the_grid_is_every_combination_with_the_taps_varying_fastest() {
         let grid = Grid {
+            ao_estimator: vec![AoEstimator::Bitmask],
             ao_samples: vec![4, 8],
             radiosity_samples: vec![5, 9],
             layers: vec![1, 2],

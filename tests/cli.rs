@@ -197,7 +197,8 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
         let dir = out_dir(name);
         let output = cli()
             .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
-            .args(["--ao-samples", "4,8", "--radiosity-samples", "5", "--layers", "1,2"])
+            .args(["--ao-estimator", "bitmask", "--ao-samples", "4,8"])
+            .args(["--radiosity-samples", "5", "--layers", "1,2"])
             .args(["--precision", "full", "--out"])
             .arg(&dir)
             .output()
@@ -213,14 +214,21 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
         let rows: Vec<Vec<String>> =
             lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
         assert_eq!(rows.len(), 4, "2 tap counts x 2 layer counts");
-        for column in ["ao_rmse", "indirect_instability", "image_rmse", "image_ssim", "ms_resolve"]
-        {
+        for column in [
+            "ao_estimator",
+            "ao_slices",
+            "ao_rmse",
+            "indirect_instability",
+            "image_rmse",
+            "image_ssim",
+            "ms_resolve",
+        ] {
             assert!(header.contains(&column), "{column} in {header:?}");
         }
         for row in &rows {
             assert_eq!(row.len(), header.len());
             for (h, v) in header.iter().zip(row) {
-                if *h != "precision" && *h != "layer1" {
+                if !["precision", "layer1", "ao_estimator"].contains(h) {
                     let x: f64 = v.parse().unwrap_or_else(|_| panic!("{h} = {v}"));
                     assert!(x.is_finite() && x >= 0.0, "{h} = {v}");
                 }

@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::{PyramidLayout, mirrored};
-use crate::settings::{AoSettings, Normalization, RadiositySettings};
+use crate::settings::{AoEstimator, AoSettings, Normalization, RadiositySettings};
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
 #[repr(C)]
@@ -22,8 +22,11 @@ pub struct AoUniform {
     pub levels: u32,
     /// [`AoSettings::mip_offset`].
     pub mip_offset: u32,
-    /// Padding.
-    pub _pad: [u32; 2],
+    /// [`AoSettings::slices`].
+    pub slices: u32,
+    /// [`AoSettings::thickness`] times the radius, in scene units; 0 for the `horizon`
+    /// estimator (solid without end).
+    pub thickness: f32,
     /// Level offsets in the packed pyramid (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
@@ -33,7 +36,7 @@ mirrored!(
     AoUniform,
     "ao.wgsl",
     "Ao",
-    [radius, bias, intensity, samples, levels, mip_offset, offsets]
+    [radius, bias, intensity, samples, levels, mip_offset, slices, thickness, offsets]
 );
 
 impl AoUniform {
@@ -50,7 +53,11 @@ impl AoUniform {
             samples: settings.samples,
             levels: layout.levels.len().min(8) as u32,
             mip_offset: settings.mip_offset,
-            _pad: [0; 2],
+            slices: settings.slices,
+            thickness: match settings.estimator {
+                AoEstimator::Bitmask => settings.thickness * settings.radius,
+                _ => 0.0,
+            },
             offsets,
         }
     }

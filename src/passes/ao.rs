@@ -6,7 +6,7 @@ use super::{FrameContext, Recorder, Stage};
 use crate::frame::AoUniform;
 use crate::gpu::{self, slots::ao as slot};
 use crate::plan::PassId;
-use crate::settings::Settings;
+use crate::settings::{AoEstimator, Settings};
 
 /// The obscurance: depth pyramids of the layers it reads, its constants, raw AV, the blur's
 /// intermediate and blurred AV (f32 per pixel).
@@ -82,6 +82,9 @@ impl Stage for AoStage {
                 let mut defines = ctx.settings.precision.defines();
                 if self.two_layers {
                     defines.push("TWO_LAYERS");
+                }
+                if ctx.settings.ao.estimator != AoEstimator::Sao {
+                    defines.push("SLICES");
                 }
                 let pipeline = ctx.pipelines.get(ctx.device, "ao", "ao_main", &defines, &[]);
                 let entries = [
