@@ -4,7 +4,8 @@ use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::mat_mul;
 pub use crate::cpu::frame::view_position;
-use crate::cpu::spiral::{pixel_hash, pixels_per_unit, spiral_distance, spiral_tap};
+use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
+use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
 use crate::frame::FrameUniform;
 use crate::frame::PyramidLayout;
 use crate::gbuffer::GSample;
@@ -107,71 +108,6 @@ fn sao(
     out
 }
 
-const SECTORS: u32 = 32;
-const PI: f32 = std::f32::consts::PI;
-
-/// Antiderivative of cos(t - gamma) sin(t) (`arc_f`).
-fn arc_f(t: f32, gamma: f32) -> f32 {
-    -0.25 * (2.0 * t - gamma).cos() + 0.5 * t * gamma.sin()
-}
-
-/// As `arc_weight`: the weight of the arc from gamma - pi/2 to theta.
-fn arc_weight(theta: f32, gamma: f32) -> f32 {
-    let start = arc_f(gamma - 0.5 * PI, gamma);
-    if theta <= 0.0 {
-        start - arc_f(theta, gamma)
-    } else {
-        start + arc_f(theta, gamma) - 2.0 * arc_f(0.0, gamma)
-    }
-}
-
-/// As `struct Slice`.
-struct Slice {
-    v: Vec3,
-    gamma: f32,
-    total: f32,
-    offset: f32,
-}
-
-impl Slice {
-    /// As `angle_in`.
-    fn angle(&self, d: Vec3, side: f32) -> f32 {
-        side * (d.dot(self.v) / d.length().max(1e-30)).clamp(-1.0, 1.0).acos()
-    }
-
-    /// As `sector_bits`.
-    fn bits(&self, theta0: f32, theta1: f32) -> u32 {
-        let (a, b) = (self.gamma - 0.5 * PI, self.gamma + 0.5 * PI);
-        let lo = theta0.min(theta1).clamp(a, b);
-        let hi = theta0.max(theta1).clamp(a, b);
-        let scale = SECTORS as f32 / self.total;
-        let first = (arc_weight(lo, self.gamma) * scale - self.offset).ceil() as i32;
-        let last = ((arc_weight(hi, self.gamma) * scale - self.offset).floor() as i32)
-            .min(SECTORS as i32 - 1);
-        let first = first.max(0);
-        if last < first {
-            return 0;
-        }
-        let count = (last - first + 1) as u32;
-        let ones = if count >= 32 { u32::MAX } else { (1 << count) - 1 };
-        ones << first as u32
-    }
-}
-
-/// As `segment_distance`.
-fn segment_distance(c: Vec3, y: Vec3, back: Vec3, endless: bool) -> f32 {
-    let d = back - y;
-    let dd = d.dot(d);
-    let mut t = 0.0;
-    if dd > 0.0 {
-        t = ((c - y).dot(d) / dd).max(0.0);
-        if !endless {
-            t = t.min(1.0);
-        }
-    }
-    (y + d * t - c).length()
-}
-
 /// The `horizon` and `bitmask` estimators (`slice_visibility`).
 struct Slices<'a> {
     f: &'a FrameUniform,
@@ -189,33 +125,6 @@ impl Slices<'_> {
         }
     }
 
-    /// As `hidden`: the sectors a point hides and their falloff.
-    #[allow(clippy::too_many_arguments, reason = "the WGSL function's arguments, in its order")]
-    fn hidden(
-        &self,
-        sl: &Slice,
-        c: Vec3,
-        n: Vec3,
-        at: Vec2,
-        side: f32,
-        z: f32,
-        back: f32,
-    ) -> (u32, f32) {
-        let lower = n * self.s.bias;
-        let y = view_position(self.f, at, z) - lower;
-        let endless = back.is_nan() || back <= z;
-        let far = view_position(self.f, at, if endless { 2.0 * z } else { back }) - lower;
-        let nearest = segment_distance(c, y, far, endless);
-        let r2 = self.s.radius * self.s.radius;
-        let height = (y - c).dot(n);
-        if nearest.is_nan() || nearest * nearest >= r2 || height.is_nan() || height <= 0.0 {
-            return (0, 0.0);
-        }
-        let theta0 = sl.angle(y - c, side);
-        let theta1 = if endless { PI * side } else { sl.angle(far - c, side) };
-        (sl.bits(theta0, theta1), (1.0 - (y - c).length_squared() / r2).max(0.0))
-    }
-
     fn visibility(&self, x: u32, y: u32, normal: Vec3) -> f32 {
         let (f, s) = (self.f, self.s);
         let p = (y * f.width + x) as usize;
@@ -225,39 +134,28 @@ impl Slices<'_> {
         }
         let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, z);
         let n = mat_mul(&f.view, normal.extend(0.0).to_array()).xyz().normalize();
-        let v = if f.ortho != 0 { Vec3::Z } else { (-c).normalize() };
         let r_px = s.radius * pixels_per_unit(f, z);
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
         let spacing = r_px / steps as f32;
         let levels = self.layout.levels.len().min(8) as i32;
         let level = (spacing.max(1.0).log2().floor() as i32).clamp(0, levels - 1) as usize;
-        let hash = pixel_hash(x, y);
-        let turn = (hash >> 20) as f32 / 4096.0;
-        let jitter = ((hash >> 8) & 0xfff) as f32 / 4096.0;
-        let offset = (hash & 0xff) as f32 / 256.0 + 0.5 / 256.0;
+        let noise = slice_noise(x, y, 0);
         let thickness = self.thickness();
+        let r2 = s.radius * s.radius;
+        let falloff = |front2: f32| (1.0 - front2 / r2).max(0.0);
         let mut total = 0.0;
         for k in 0..slices {
-            let phi = PI * (k as f32 + turn) / slices as f32;
-            let dir = Vec2::new(phi.cos(), phi.sin());
-            let s_view = Vec3::new(dir.x, -dir.y, 0.0);
-            let axis = (s_view - v * s_view.dot(v)).normalize();
-            let plane = v.cross(axis);
-            let np = n - plane * n.dot(plane);
-            let np_len = np.length();
-            if np_len.is_nan() || np_len <= 1e-6 {
+            let sl = Slice::at(f, k, slices, noise, c, n);
+            if sl.weight.is_nan() || sl.weight <= 0.0 {
                 continue;
             }
-            let gamma = np.dot(axis).atan2(np.dot(v)).clamp(-0.5 * PI, 0.5 * PI);
-            let total_weight = arc_weight(gamma + 0.5 * PI, gamma);
-            let sl = Slice { v, gamma, total: total_weight, offset };
             let mut occupied = 0u32;
-            let mut hidden_weight = 0.0;
+            let mut hidden = 0.0;
             for j in 0..steps {
-                let h = spacing * (j as f32 + jitter);
-                for sign in [1.0, -1.0] {
-                    let t = (Vec2::new(x as f32, y as f32) + 0.5 + sign * h * dir).floor();
+                let h = spacing * (j as f32 + noise.1);
+                for side in [1.0, -1.0] {
+                    let t = (Vec2::new(x as f32, y as f32) + 0.5 + side * h * sl.dir).floor();
                     let (tx, ty) = (t.x as i32, t.y as i32);
                     if tx < 0
                         || ty < 0
@@ -277,26 +175,20 @@ impl Slices<'_> {
                         continue;
                     }
                     let z1 = self.pyramid1.map_or(0.0, |p1| p1[q]);
-                    let back0 = if thickness > 0.0 {
-                        let b = z0 + thickness;
-                        if z1 > z0 { b.min(z1) } else { b }
-                    } else if z1 > z0 {
-                        z1
-                    } else {
-                        0.0
-                    };
-                    let (bits, f0) = self.hidden(&sl, c, n, at, sign, z0, back0);
-                    hidden_weight += f0 * (bits & !occupied).count_ones() as f32;
+                    let (back0, back1) = solid_backs(z0, z1, thickness);
+                    let (bits, front2) =
+                        sl.solid_sectors(f, c, n, at, side, z0, back0, s.bias, s.radius);
+                    hidden += falloff(front2) * (bits & !occupied).count_ones() as f32;
                     occupied |= bits;
                     if z1 > z0 {
-                        let back1 = if thickness > 0.0 { z1 + thickness } else { 0.0 };
-                        let (bits, f1) = self.hidden(&sl, c, n, at, sign, z1, back1);
-                        hidden_weight += f1 * (bits & !occupied).count_ones() as f32;
+                        let (bits, front2) =
+                            sl.solid_sectors(f, c, n, at, side, z1, back1, s.bias, s.radius);
+                        hidden += falloff(front2) * (bits & !occupied).count_ones() as f32;
                         occupied |= bits;
                     }
                 }
             }
-            total += np_len * total_weight * hidden_weight / SECTORS as f32;
+            total += sl.weight * hidden / SECTORS as f32;
         }
         (1.0 - s.intensity * total / slices as f32).clamp(0.0, 1.0)
     }

@@ -12,4 +12,5 @@ pub mod raster;
 pub mod reflections;
 pub mod resolve;
 pub mod shadow;
+pub mod slices;
 pub mod spiral;

@@ -1,0 +1,151 @@
+//! CPU mirror of `wgsl/shared/slices.wgsl`: the slices of the hemisphere that the obscurance's
+//! `horizon` and `bitmask` estimators and the radiosity's `slices` gather integrate over.
+
+use glam::{Vec2, Vec3};
+
+use crate::cpu::frame::view_position;
+use crate::cpu::spiral::pixel_hash;
+use crate::frame::FrameUniform;
+
+/// Sectors per slice (one bit each).
+pub const SECTORS: u32 = 32;
+const PI: f32 = std::f32::consts::PI;
+
+/// As `slice_noise`: the pixel's turn of the slices, jitter of the steps and offset of the
+/// sectors, moved on by `frame_turn` golden-ratio steps.
+pub fn slice_noise(x: u32, y: u32, frame_turn: u32) -> (f32, f32, f32) {
+    let hash = pixel_hash(x, y);
+    let turn = ((hash >> 20) as f32 / 4096.0 + (frame_turn % 4096) as f32 * 0.618_034).fract();
+    let jitter = ((hash >> 8) & 0xfff) as f32 / 4096.0;
+    let offset = (hash & 0xff) as f32 / 256.0 + 0.5 / 256.0;
+    (turn, jitter, offset)
+}
+
+/// Antiderivative of cos(t - gamma) sin(t) (`arc_f`).
+fn arc_f(t: f32, gamma: f32) -> f32 {
+    -0.25 * (2.0 * t - gamma).cos() + 0.5 * t * gamma.sin()
+}
+
+/// As `arc_weight`: the weight of the arc from gamma - pi/2 to theta.
+fn arc_weight(theta: f32, gamma: f32) -> f32 {
+    let start = arc_f(gamma - 0.5 * PI, gamma);
+    if theta <= 0.0 {
+        start - arc_f(theta, gamma)
+    } else {
+        start + arc_f(theta, gamma) - 2.0 * arc_f(0.0, gamma)
+    }
+}
+
+/// As `segment_distance`.
+fn segment_distance(c: Vec3, y: Vec3, back: Vec3, endless: bool) -> f32 {
+    let d = back - y;
+    let dd = d.dot(d);
+    let mut t = 0.0;
+    if dd > 0.0 {
+        t = ((c - y).dot(d) / dd).max(0.0);
+        if !endless {
+            t = t.min(1.0);
+        }
+    }
+    (y + d * t - c).length()
+}
+
+/// As `solid_backs`: where the solids of a step's two layers end (0: without end).
+pub fn solid_backs(z0: f32, z1: f32, thickness: f32) -> (f32, f32) {
+    if thickness > 0.0 {
+        let back0 = if z1 > z0 { (z0 + thickness).min(z1) } else { z0 + thickness };
+        (back0, z1 + thickness)
+    } else {
+        (if z1 > z0 { z1 } else { 0.0 }, 0.0)
+    }
+}
+
+/// As `struct Slice`.
+pub struct Slice {
+    /// Screen direction of the slice.
+    pub dir: Vec2,
+    v: Vec3,
+    gamma: f32,
+    total: f32,
+    /// |n_p| W_total: the slice's share of the integral (0 when degenerate).
+    pub weight: f32,
+    offset: f32,
+}
+
+impl Slice {
+    /// As `slice_at`: slice `k` of `count` at view-space point `c` (normal `n`).
+    pub fn at(
+        f: &FrameUniform,
+        k: u32,
+        count: u32,
+        noise: (f32, f32, f32),
+        c: Vec3,
+        n: Vec3,
+    ) -> Self {
+        let phi = PI * (k as f32 + noise.0) / count as f32;
+        let dir = Vec2::new(phi.cos(), phi.sin());
+        let v = if f.ortho != 0 { Vec3::Z } else { (-c).normalize() };
+        let s_view = Vec3::new(dir.x, -dir.y, 0.0);
+        let axis = (s_view - v * s_view.dot(v)).normalize();
+        let plane = v.cross(axis);
+        let np = n - plane * n.dot(plane);
+        let np_len = np.length();
+        let gamma = np.dot(axis).atan2(np.dot(v)).clamp(-0.5 * PI, 0.5 * PI);
+        let total = arc_weight(gamma + 0.5 * PI, gamma);
+        let weight = if np_len > 1e-6 { np_len * total } else { 0.0 };
+        Slice { dir, v, gamma, total, weight, offset: noise.2 }
+    }
+
+    /// As `angle_in`.
+    fn angle(&self, d: Vec3, side: f32) -> f32 {
+        side * (d.dot(self.v) / d.length().max(1e-30)).clamp(-1.0, 1.0).acos()
+    }
+
+    /// As `sector_bits`.
+    fn bits(&self, theta0: f32, theta1: f32) -> u32 {
+        let (a, b) = (self.gamma - 0.5 * PI, self.gamma + 0.5 * PI);
+        let lo = theta0.min(theta1).clamp(a, b);
+        let hi = theta0.max(theta1).clamp(a, b);
+        let scale = SECTORS as f32 / self.total;
+        let first = (arc_weight(lo, self.gamma) * scale - self.offset).ceil() as i32;
+        let last = ((arc_weight(hi, self.gamma) * scale - self.offset).floor() as i32)
+            .min(SECTORS as i32 - 1);
+        let first = first.max(0);
+        if last < first {
+            return 0;
+        }
+        let count = (last - first + 1) as u32;
+        let ones = if count >= 32 { u32::MAX } else { (1 << count) - 1 };
+        ones << first as u32
+    }
+
+    /// As `solid_sectors`: the sectors the solid of a point hides, and the squared distance
+    /// from `c` to the (lowered) point.
+    #[allow(clippy::too_many_arguments, reason = "the WGSL function's arguments, in its order")]
+    pub fn solid_sectors(
+        &self,
+        f: &FrameUniform,
+        c: Vec3,
+        n: Vec3,
+        at: Vec2,
+        side: f32,
+        z: f32,
+        back: f32,
+        lower: f32,
+        radius: f32,
+    ) -> (u32, f32) {
+        let down = n * lower;
+        let y = view_position(f, at, z) - down;
+        let endless = back.is_nan() || back <= z;
+        let far = view_position(f, at, if endless { 2.0 * z } else { back }) - down;
+        let nearest = segment_distance(c, y, far, endless);
+        let front2 = (y - c).length_squared();
+        let height = (y - c).dot(n);
+        if nearest.is_nan() || nearest >= radius || height.is_nan() || height <= 0.0 {
+            return (0, front2);
+        }
+        let theta0 = self.angle(y - c, side);
+        let theta1 = if endless { PI * side } else { self.angle(far - c, side) };
+        (self.bits(theta0, theta1), front2)
+    }
+}

@@ -1,0 +1,150 @@
+// Slices of the hemisphere, shared by the obscurance (`horizon`, `bitmask`) and the radiosity
+// gather (`slices`). src/cpu/slices.rs is the same on the CPU.
+//
+// A slice is the plane through the view vector V and one screen direction phi (turned per
+// pixel). In it a direction is its angle theta from V, the hemisphere around the normal is
+// theta in [gamma - pi/2, gamma + pi/2] (gamma: the angle of the normal projected into the
+// slice, n_p), and dw = |sin theta| dtheta dphi, so the slice holds
+//     |n_p| integral g(theta) cos(theta - gamma) |sin theta| dtheta
+// of any cosine-weighted integral integral g(w) cos dw, over phi in [0, pi). The weight
+// W(theta) of the arc from its start has a closed form; the arc is cut into SECTORS sectors of
+// equal weight (one bit each, their centres offset per pixel so that no direction is always
+// rounded the same way). Steps marched outwards on both sides of the slice's screen line read
+// each layer's point at that pixel; a point hides the arc from its own direction to the
+// direction of its back (a solid along its view ray, `back` deep, or without end), and a sector
+// takes the value of the first point that hides it. With S slices at phi = pi (k + turn) / S
+// the integral is (pi / S) sum_slices |n_p| W_total / SECTORS sum_sectors g.
+// Needs shared/frame.wgsl and shared/spiral.wgsl.
+
+const SECTORS: u32 = 32u;
+const SLICE_PI: f32 = 3.14159265;
+
+// One slice at a pixel: V, gamma, the arc's total weight W_total and its share of the
+// integral |n_p| W_total (0 when the normal is perpendicular to the slice).
+struct Slice {
+    dir: vec2<f32>,
+    v: vec3<f32>,
+    gamma: f32,
+    total: f32,
+    weight: f32,
+    offset: f32,
+}
+
+// A pixel's turn of the slices, jitter of the steps and offset of the sectors, from its hash,
+// moved on by `frame_turn` golden-ratio steps (temporal accumulation sees other slices).
+fn slice_noise(pixel: vec2<u32>, frame_turn: u32) -> vec3<f32> {
+    let hash = pixel_hash(pixel);
+    let turn = fract(f32(hash >> 20u) / 4096.0 + f32(frame_turn % 4096u) * 0.618034);
+    let jitter = f32((hash >> 8u) & 0xfffu) / 4096.0;
+    let offset = f32(hash & 0xffu) / 256.0 + 0.5 / 256.0;
+    return vec3<f32>(turn, jitter, offset);
+}
+
+// Antiderivative of cos(t - gamma) sin(t).
+fn arc_f(t: f32, gamma: f32) -> f32 {
+    return -0.25 * cos(2.0 * t - gamma) + 0.5 * t * sin(gamma);
+}
+
+// W(theta): the weight integral of cos(t - gamma) |sin t| from the arc's start gamma - pi/2.
+fn arc_weight(theta: f32, gamma: f32) -> f32 {
+    let start = arc_f(gamma - 0.5 * SLICE_PI, gamma);
+    if theta <= 0.0 {
+        return start - arc_f(theta, gamma);
+    }
+    return start + arc_f(theta, gamma) - 2.0 * arc_f(0.0, gamma);
+}
+
+// Slice k of `count` at the view-space point c (normal n) with the pixel's noise.
+fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> Slice {
+    var sl: Slice;
+    let phi = SLICE_PI * (f32(k) + noise.x) / f32(count);
+    sl.dir = vec2<f32>(cos(phi), sin(phi));
+    sl.v = select(normalize(-c), vec3<f32>(0.0, 0.0, 1.0), frame.ortho != 0u);
+    // Screen y runs down, view y up.
+    let s_view = vec3<f32>(sl.dir.x, -sl.dir.y, 0.0);
+    let axis = normalize(s_view - sl.v * dot(s_view, sl.v));
+    let plane = cross(sl.v, axis);
+    let np = n - plane * dot(n, plane);
+    let np_len = length(np);
+    sl.gamma = clamp(atan2(dot(np, axis), dot(np, sl.v)), -0.5 * SLICE_PI, 0.5 * SLICE_PI);
+    sl.total = arc_weight(sl.gamma + 0.5 * SLICE_PI, sl.gamma);
+    sl.weight = select(0.0, np_len * sl.total, np_len > 1e-6);
+    sl.offset = noise.z;
+    return sl;
+}
+
+// The slice angle of direction d from a tap on the slice's `side` (+-1): d turned about V into
+// the slice, on that side (its angle from V kept, as a tap just off the slice's line should
+// count; a projection could carry a point below the tangent plane into the hemisphere).
+fn angle_in(sl: Slice, d: vec3<f32>, side: f32) -> f32 {
+    return side * acos(clamp(dot(d, sl.v) / max(length(d), 1e-30), -1.0, 1.0));
+}
+
+// The sectors whose centres lie in the arc between directions theta0 and theta1.
+fn sector_bits(sl: Slice, theta0: f32, theta1: f32) -> u32 {
+    let lo = clamp(min(theta0, theta1), sl.gamma - 0.5 * SLICE_PI, sl.gamma + 0.5 * SLICE_PI);
+    let hi = clamp(max(theta0, theta1), sl.gamma - 0.5 * SLICE_PI, sl.gamma + 0.5 * SLICE_PI);
+    let scale = f32(SECTORS) / sl.total;
+    let first = i32(ceil(arc_weight(lo, sl.gamma) * scale - sl.offset));
+    let last = min(i32(floor(arc_weight(hi, sl.gamma) * scale - sl.offset)), i32(SECTORS) - 1);
+    let a = max(first, 0);
+    if last < a {
+        return 0u;
+    }
+    let count = u32(last - a + 1);
+    let ones = select((1u << count) - 1u, 0xffffffffu, count >= 32u);
+    return ones << u32(a);
+}
+
+// Distance from c to the segment from y to back (a ray on from y when `endless`).
+fn segment_distance(c: vec3<f32>, y: vec3<f32>, back: vec3<f32>, endless: bool) -> f32 {
+    let d = back - y;
+    let dd = dot(d, d);
+    var t = 0.0;
+    if dd > 0.0 {
+        t = max(dot(c - y, d) / dd, 0.0);
+        if !endless {
+            t = min(t, 1.0);
+        }
+    }
+    return length(y + d * t - c);
+}
+
+// Where the solids of a step's two layers end (view depth; 0: without end). A thickness of 0
+// makes every surface solid without end (a height field); otherwise layer 0 reaches `thickness`
+// behind itself but no deeper than layer 1's surface, and layer 1 reaches `thickness` behind
+// itself.
+fn solid_backs(z0: f32, z1: f32, thickness: f32) -> vec2<f32> {
+    if thickness > 0.0 {
+        var back0 = z0 + thickness;
+        if z1 > z0 {
+            back0 = min(back0, z1);
+        }
+        return vec2<f32>(back0, z1 + thickness);
+    }
+    return vec2<f32>(select(0.0, z1, z1 > z0), 0.0);
+}
+
+// The sectors that the solid of a point at view depth z (pixel centre `at`, on the slice's side
+// `side` = +-1) hides from c: none unless the solid comes within `radius` of c and the point,
+// lowered by `lower` along the normal n, lies above c's tangent plane (its solid runs away from
+// the camera, further below). `back`: the depth its solid ends at, 0 for without end (towards
+// theta = +-pi on its side: the far end of its view ray, seen from c, lies off c's own ray on
+// the tap's side). `front2`: the squared distance from c to the (lowered) point.
+fn solid_sectors(sl: Slice, c: vec3<f32>, n: vec3<f32>, at: vec2<f32>, side: f32, z: f32, back: f32, lower: f32, radius: f32, front2: ptr<function, f32>) -> u32 {
+    let down = n * lower;
+    let y = view_position(frame, at, z) - down;
+    let endless = !(back > z);
+    let far = view_position(frame, at, select(back, 2.0 * z, endless)) - down;
+    let nearest = segment_distance(c, y, far, endless);
+    *front2 = dot(y - c, y - c);
+    if !(nearest < radius) || !(dot(y - c, n) > 0.0) {
+        return 0u;
+    }
+    let theta0 = angle_in(sl, y - c, side);
+    var theta1 = angle_in(sl, far - c, side);
+    if endless {
+        theta1 = SLICE_PI * side;
+    }
+    return sector_bits(sl, theta0, theta1);
+}
