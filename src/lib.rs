@@ -61,5 +61,5 @@ pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Projection, Scene, SceneInfo};
 pub use settings::{
     AoEstimator, AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision,
-    Preset, RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
+    Preset, RadiosityEstimator, RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
 };

@@ -8,8 +8,8 @@ use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
     AoEstimator, AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error,
-    Layer1Variant, Normalization, PassId, Precision, Preset, RadiositySettings, Renderer, Result,
-    Scene, SceneBuffers, Settings, output,
+    Layer1Variant, Normalization, PassId, Precision, Preset, RadiosityEstimator, RadiositySettings,
+    Renderer, Result, Scene, SceneBuffers, Settings, output,
 };
 use glam::Vec3;
 
@@ -182,6 +182,9 @@ struct TruthArgs {
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
     #[command(flatten)]
     ao: AoArgs,
+    /// The GPU estimate's radiosity (with --compare).
+    #[command(flatten)]
+    radiosity: RadiosityArgs,
     /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
     #[arg(long)]
     compare: bool,
@@ -224,6 +227,34 @@ impl AoArgs {
         if self.ao_one_layer {
             ao.two_layers = false;
         }
+    }
+}
+
+/// The radiosity gather's settings (render, and truth's GPU estimate). Those not given keep the
+/// default's (or the preset's) value.
+#[derive(clap::Args)]
+struct RadiosityArgs {
+    /// Radiosity gather (see `wgsl/radiosity.wgsl`) [default: slices].
+    #[arg(long, value_enum)]
+    radiosity_estimator: Option<RadiosityEstimator>,
+    /// Radiosity gather radius in scene units.
+    #[arg(long, default_value_t = RadiositySettings::default().radius)]
+    radiosity_radius: f32,
+    /// Radiosity taps per pixel [default: 32, or the preset's].
+    #[arg(long)]
+    radiosity_samples: Option<u32>,
+    /// Slices per pixel of the slices gather [default: 2].
+    #[arg(long)]
+    radiosity_slices: Option<u32>,
+}
+
+impl RadiosityArgs {
+    /// Sets what was given on `r`.
+    fn apply(&self, r: &mut RadiositySettings) {
+        r.radius = self.radiosity_radius;
+        r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
+        r.samples = self.radiosity_samples.unwrap_or(r.samples);
+        r.slices = self.radiosity_slices.unwrap_or(r.slices);
     }
 }
 
@@ -292,13 +323,10 @@ struct RenderArgs {
     no_ao: bool,
     #[command(flatten)]
     ao: AoArgs,
-    /// Radiosity gather radius in scene units.
-    #[arg(long, default_value_t = RadiositySettings::default().radius)]
-    radiosity_radius: f32,
-    /// Radiosity taps per pixel (default: 13, or the preset's).
-    #[arg(long)]
-    radiosity_samples: Option<u32>,
-    /// How the radiosity gather normalises its taps (cosine conserves energy; paper is 2 pi / M).
+    #[command(flatten)]
+    radiosity: RadiosityArgs,
+    /// How the spiral radiosity gather normalises its taps (cosine conserves energy; paper is
+    /// 2 pi / M).
     #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
     normalization: Normalization,
     /// Equirectangular EXR environment that reflection rays see when they leave the screen
@@ -429,7 +457,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     if args.compare {
         let gpu = open_gpu(adapter)?;
         let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
-        let settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
+        let mut settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
+        args.radiosity.apply(&mut settings.radiosity);
+        settings.validate()?;
         let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
         renderer.set_environment(&gpu.device, env)?;
         if args.frames == 0 {
@@ -648,7 +678,6 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         atomics: args.atomics,
         ao: AoSettings { enabled: !args.no_ao, ..AoSettings::default() },
         radiosity: RadiositySettings {
-            radius: args.radiosity_radius,
             normalization: args.normalization,
             boost: args.boost,
             damping: args.damping,
@@ -664,9 +693,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         settings.precision = p;
     }
     args.ao.apply(&mut settings.ao);
-    if let Some(n) = args.radiosity_samples {
-        settings.radiosity.samples = n;
-    }
+    args.radiosity.apply(&mut settings.radiosity);
     settings.validate()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::InvalidSetting {
@@ -725,9 +752,14 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             output::write_png_display(&dir.join("ao.png"), w, h, &grey)?;
             output::write_exr(&dir.join("ao.exr"), w, h, &grey)?;
         }
-        // Each lighting term alone, tone mapped like the image: direct radiance, and the
-        // radiosity term as the composite adds it.
-        let lit = [("direct", Some(&terms.direct)), ("radiosity", terms.radiosity.as_ref())];
+        // Each lighting term alone, tone mapped like the image: direct radiance, the radiosity
+        // term as the composite adds it, and the indirect irradiance it comes from (what
+        // `truth --effect indirect` traces).
+        let lit = [
+            ("direct", Some(&terms.direct)),
+            ("radiosity", terms.radiosity.as_ref()),
+            ("indirect", terms.indirect.as_ref()),
+        ];
         for (name, term) in lit {
             let Some(term) = term else { continue };
             let png = dir.join(format!("{name}.png"));

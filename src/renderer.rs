@@ -114,8 +114,8 @@ pub struct Terms {
     pub av: Option<Vec<f32>>,
     /// Direct radiance of layer 0 (zero where no light runs).
     pub direct: Vec<Vec3>,
-    /// The indirect irradiance as the composite weighs it (the confidence times E); `None`
-    /// without radiosity. The rest of the hemisphere, which no tap covered, is the ambient
+    /// The indirect irradiance the gather found (the surfaces it saw, over the share of the
+    /// hemisphere they cover); `None` without radiosity. The rest of the hemisphere, which no tap covered, is the ambient
     /// term's; the ground truth of diffuse indirect light leaves the sky out the same way.
     pub indirect: Option<Vec<Vec3>>,
     /// The radiosity term the composite adds: the diffuse albedo / pi times `indirect`.
@@ -922,16 +922,12 @@ impl Renderer {
         let (indirect, radiosity) = match self.radiosity_buffers() {
             Some(r) => {
                 let e = self.read_vec4(device, queue, r.irradiance)?;
-                let confidence = |c: &glam::Vec4| c.w.clamp(0.0, 1.0);
-                let indirect: Vec<Vec3> = e.iter().map(|c| c.truncate() * confidence(c)).collect();
+                let indirect: Vec<Vec3> = e.iter().map(|c| c.truncate()).collect();
                 let layer0 = self.read_gbuffer(device, queue, 0)?;
-                let radiosity = e
+                let radiosity = indirect
                     .iter()
                     .zip(&layer0.samples)
-                    .map(|(c, s)| {
-                        let albedo = (1.0 - s.metallic) * s.base_color;
-                        albedo / std::f32::consts::PI * c.truncate() * confidence(c)
-                    })
+                    .map(|(e, s)| (1.0 - s.metallic) * s.base_color / std::f32::consts::PI * *e)
                     .collect();
                 (Some(indirect), Some(radiosity))
             }

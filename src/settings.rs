@@ -75,33 +75,34 @@ pub enum AoEstimator {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[derive(serde::Serialize)]
 pub enum Preset {
-    /// `bitmask` obscurance with 8 taps on 1 slice, 5 radiosity taps, layer 0 only: the
-    /// cheapest point of both fronts.
+    /// `bitmask` obscurance with 8 taps on 1 slice, the `slices` radiosity with 16 taps on 1
+    /// slice, layer 0 only: the cheapest point of both fronts.
     Low,
-    /// `bitmask` with 16 taps on 1 slice, 9 radiosity taps, both layers.
+    /// Obscurance 16 taps on 1 slice, radiosity 32 taps on 2 slices, both layers.
     Balanced,
-    /// `bitmask` with 32 taps on 2 slices (the default), 19 radiosity taps, both layers: half
-    /// the radiosity flicker of `low`.
+    /// Obscurance 32 taps on 2 slices and radiosity 32 on 2 (the defaults), both layers.
     High,
-    /// `bitmask` with 64 taps on 2 slices, 27 radiosity taps, both layers: the lowest errors
-    /// and the least flicker measured.
+    /// Obscurance 64 taps on 2 slices, radiosity 64 on 2, both layers: the lowest errors
+    /// measured.
     Ultra,
 }
 
 impl Preset {
     /// Applies the preset's knobs to `settings`.
     pub fn apply(self, settings: &mut Settings) {
-        let ((ao, slices), radiosity, layers, precision) = match self {
-            Preset::Low => ((8, 1), 5, 1, Precision::Full),
-            Preset::Balanced => ((16, 1), 9, 2, Precision::Full),
-            Preset::High => ((32, 2), 19, 2, Precision::Full),
-            Preset::Ultra => ((64, 2), 27, 2, Precision::Full),
+        let ((ao, ao_slices), (radiosity, radiosity_slices), layers, precision) = match self {
+            Preset::Low => ((8, 1), (16, 1), 1, Precision::Full),
+            Preset::Balanced => ((16, 1), (32, 2), 2, Precision::Full),
+            Preset::High => ((32, 2), (32, 2), 2, Precision::Full),
+            Preset::Ultra => ((64, 2), (64, 2), 2, Precision::Full),
         };
         settings.ao.estimator = AoEstimator::Bitmask;
         settings.ao.samples = ao;
-        settings.ao.slices = slices;
+        settings.ao.slices = ao_slices;
         settings.ao.two_layers = layers == 2;
+        settings.radiosity.estimator = RadiosityEstimator::Slices;
         settings.radiosity.samples = radiosity;
+        settings.radiosity.slices = radiosity_slices;
         // Two layers where an effect reads them (the plan decides), never forced on a scene
         // that needs none.
         settings.layers = if layers == 1 { 1 } else { 0 };
@@ -230,6 +231,13 @@ impl AoSettings {
 pub struct RadiositySettings {
     /// Run the radiosity passes.
     pub enabled: bool,
+    /// The gather.
+    pub estimator: RadiosityEstimator,
+    /// Slices per pixel of the `slices` gather, its taps shared among them. 1 to 16.
+    pub slices: u32,
+    /// How far a surface reaches behind itself, as a fraction of `radius` (`slices`; as
+    /// [`AoSettings::thickness`]).
+    pub thickness: f32,
     /// World-space gather radius, in scene units.
     pub radius: f32,
     /// Taps per pixel.
@@ -253,6 +261,22 @@ pub struct RadiositySettings {
     pub normalization: Normalization,
     /// Colour boost of the light a surface reflects into B; [`Boost::ONE`] conserves energy.
     pub boost: Boost,
+}
+
+/// How the radiosity pass gathers irradiance from what the layers show (`wgsl/radiosity.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
+pub enum RadiosityEstimator {
+    /// Spiral taps, each counted at the cosine of its direction ([`Normalization`]), with a
+    /// confidence M / N that hands the rest of the hemisphere to the ambient term.
+    Spiral,
+    /// The slices of the obscurance's `bitmask` estimator: each surface a step finds gives its
+    /// radiance to the directions it hides first, at their true cosine-weighted solid angle
+    /// (no light through a surface). The share of the hemisphere the surfaces cover is the
+    /// confidence; the rest is left to the ambient term.
+    #[default]
+    Slices,
 }
 
 /// How the radiosity gather turns its counted taps into irradiance.
@@ -308,13 +332,16 @@ impl Default for RadiositySettings {
     fn default() -> Self {
         RadiositySettings {
             enabled: true,
-            radius: 1.0,
-            samples: 13,
+            estimator: RadiosityEstimator::default(),
+            slices: 2,
+            thickness: 0.75,
+            radius: 2.0,
+            samples: 32,
             damping: 0.8,
             alpha: 0.85,
             history_tolerance: 0.01,
             normal_test: true,
-            blur_radius: 3,
+            blur_radius: 6,
             jitter: true,
             normalization: Normalization::Cosine,
             boost: Boost::ONE,
@@ -325,6 +352,18 @@ impl Default for RadiositySettings {
 impl RadiositySettings {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
+        if !(1..=16).contains(&self.slices) {
+            return Err(Error::setting(
+                "radiosity.slices",
+                format!("{} (must be 1 to 16)", self.slices),
+            ));
+        }
+        if !(self.thickness.is_finite() && self.thickness > 0.0) {
+            return Err(Error::setting(
+                "radiosity.thickness",
+                format!("{} (must be finite and > 0)", self.thickness),
+            ));
+        }
         if !(self.radius.is_finite() && self.radius > 0.0) {
             return Err(Error::setting(
                 "radiosity.radius",
@@ -384,13 +423,14 @@ impl RadiositySettings {
     }
 
     /// The most the fed-back light can grow per frame: `k * damping * max boost`, with `k` = 1
-    /// for [`Normalization::Cosine`] (the gather reads at most `pi max B`) and 2 for
-    /// [`Normalization::Paper`] (at most `2 pi max B`), and an albedo of at most 1. Below 1 the
-    /// irradiance stays below `k pi (max boost x max direct + max emission) / (1 - gain)`.
+    /// for the `slices` gather and for the spiral's [`Normalization::Cosine`] (each reads at
+    /// most `pi max B`: a weighted mean of what it saw) and 2 for [`Normalization::Paper`] (at
+    /// most `2 pi max B`), and an albedo of at most 1. Below 1 the irradiance stays below
+    /// `k pi (max boost x max direct + max emission) / (1 - gain)`.
     pub fn feedback_gain(&self) -> f32 {
-        let k = match self.normalization {
-            Normalization::Cosine => 1.0,
-            Normalization::Paper => 2.0,
+        let k = match (self.estimator, self.normalization) {
+            (RadiosityEstimator::Slices, _) | (_, Normalization::Cosine) => 1.0,
+            (RadiosityEstimator::Spiral, Normalization::Paper) => 2.0,
         };
         k * self.damping * self.boost.unsaturated.max(self.boost.saturated)
     }

@@ -11,7 +11,7 @@
 //!
 //! - obscurance: AV after the blur against world-space obscurance with the same radius and
 //!   falloff;
-//! - radiosity: the irradiance the composite takes from it (confidence times E) against diffuse
+//! - radiosity: the irradiance the composite takes from it (what the gather found) against diffuse
 //!   indirect irradiance path traced with [`TRUTH_BOUNCES`] bounces (the temporal gather adds
 //!   one bounce a frame);
 //! - reflections (scenes with a reflective material): the reflected radiance against traced

@@ -162,14 +162,14 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
     use deep_gbuffer::Preset;
     let mut low = Settings::default();
     Preset::Low.apply(&mut low);
-    assert_eq!((low.ao.samples, low.ao.slices, low.radiosity.samples, low.layers), (8, 1, 5, 1));
+    assert_eq!((low.ao.samples, low.ao.slices, low.radiosity.samples, low.layers), (8, 1, 16, 1));
     assert_eq!(low.ao.estimator, deep_gbuffer::AoEstimator::Bitmask);
     assert_eq!(low.precision, deep_gbuffer::Precision::Full);
     let mut ultra = Settings::default();
     Preset::Ultra.apply(&mut ultra);
     assert_eq!(
         (ultra.ao.samples, ultra.ao.slices, ultra.radiosity.samples, ultra.layers),
-        (64, 2, 27, 0)
+        (64, 2, 64, 0)
     );
     assert!(ultra.ao.two_layers);
     for preset in [Preset::Low, Preset::Balanced, Preset::High, Preset::Ultra] {

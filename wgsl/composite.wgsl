@@ -1,8 +1,9 @@
 // Composite: DIRECT + AV * AMBIENT + RADIOSITY + emission into an HDR image (rgb, a = 1 on
 // surfaces). The diffuse albedo (1 - metallic) * base colour / pi reflects the irradiance
-//     conf * E + (1 - conf) * AV * pi * ambient,
-// where E is the radiosity irradiance and conf its confidence M / N (both 0 without RADIOSITY,
-// which leaves AV * ambient * albedo), and AV is 1 without obscurance (AO undefined). Pixels
+//     E + (1 - conf) * AV * pi * ambient,
+// where E is the irradiance the radiosity gather found and conf the share of the hemisphere it
+// covers (both 0 without RADIOSITY, which leaves AV * ambient * albedo): the ambient term fills
+// the rest. AV is 1 without obscurance (AO undefined). Pixels
 // without a surface show the sky. With REFLECTIONS the reflected radiance (already scaled by the
 // reflectivity) is added.
 // src/cpu/composite.rs is the same on the CPU.
@@ -56,7 +57,7 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     confidence = clamp(radiosity[p].a, 0.0, 1.0);
 #endif
     let albedo = (1.0 - s.metallic) * s.base_color;
-    let reflected = albedo * (confidence / 3.14159265 * e + (1.0 - confidence) * visibility * composite.ambient);
+    let reflected = albedo * (e / 3.14159265 + (1.0 - confidence) * visibility * composite.ambient);
     var mirrored = vec3<f32>(0.0);
 #if REFLECTIONS
     mirrored = reflections[p].rgb;

@@ -2,7 +2,8 @@
 //
 // radiosity_feedback: B, the outgoing radiance the gather reads: reflected light, boosted, plus
 //   emission, B = boost(rho) (D + delta (1 - metallic) rho / pi * E_prev) + Le, with E_prev the
-//   previous frame's filtered irradiance at this point (reprojected; 0 where there is none) and
+//   previous frame's filtered irradiance at this point spread over its whole hemisphere (the
+//   irradiance found over the share it covers; reprojected; 0 where there is none) and
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
 //   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
 // radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
@@ -11,20 +12,37 @@
 //   number of taps that count,
 //     cosine (default): E(X) = pi * sum B(Y) (w.n_X) / sum (w.n_X)
 //     paper:            E(X) = 2 pi / M * sum B(Y) (w.n_X)
-//   (src/settings.rs, Normalization, says why the default differs). The confidence M / N is kept
-//   in alpha.
-// radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha where the reprojected point lies within
+//   (src/settings.rs, Normalization, says why the default differs), and the confidence
+//   conf = M / N; it writes conf E (the light of the share of the hemisphere its taps stand for)
+//   and conf.
+//   With SLICES (the default `slices` estimator) the gather runs over the slices of
+//   shared/slices.wgsl instead: steps out to the world-space radius read both layers' points at
+//   full resolution, each point's solid (`thickness` deep, layer 0's no deeper than layer 1's
+//   surface) hides an arc of sectors, and the sectors a point hides first take its B: each
+//   surface's light arrives at the cosine-weighted solid angle it subtends from X, and none
+//   through a surface that hides it. With g = B in the slices' sum the surfaces deliver
+//     E_seen = (pi / S) sum_slices |n_p| W_total / SECTORS sum_sectors B
+//   over the share c = (1 / S) sum_slices |n_p| W_total / SECTORS (sectors hidden) of the
+//   cosine-weighted hemisphere, and writes E_seen and c: the directions no surface covers are
+//   left to the ambient term. The spiral turns every frame (jitter), and so do the slices.
+// Both write the irradiance itself, not a mean to be scaled by the confidence, so that the blur
+// and the temporal filter average it linearly (a mean of products is not the product of means:
+// a pixel that saw little but bright light next to one that saw much dim light would otherwise
+// read as much bright light).
+// radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha (irradiance and coverage alike) where
+//   the reprojected point lies within
 //   `tolerance` (view depth, scene units) of the previous frame's layer 0; otherwise E. The
 //   history holds layer 0's irradiance only, so a point that was hidden (in layer 1, or not at
 //   all) has none: taking the layer-0 value there would paint the surface that covered it.
 //   Non-finite values never enter the history.
 // src/cpu/radiosity.rs is the same on the CPU.
-// defines: PACKED
+// defines: PACKED SLICES
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/spiral.wgsl"
 #include "shared/vis.wgsl"
+#include "shared/slices.wgsl"
 
 // Mirrors `RadiosityUniform` in src/frame/uniforms.rs.
 struct Radiosity {
@@ -42,7 +60,14 @@ struct Radiosity {
     normalization: u32,
     boost_unsaturated: f32,
     boost_saturated: f32,
-    pad: u32,
+    // Slices per pixel (SLICES).
+    slices: u32,
+    // How far a surface reaches behind itself, in scene units (SLICES).
+    thickness: f32,
+    // 0: spiral, 1: slices (the kernel is chosen by define; the CPU reference reads this).
+    estimator: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // boost(rho): the colour boost of reflected light (1 with the default settings).
@@ -89,9 +114,10 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.0e38));
 }
 
-// The previous frame's filtered irradiance at the layer-0 point of `pixel` (rgb) and whether it
-// is valid (a = 1).
-fn history_at(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
+// The previous frame's filtered history at the layer-0 point of `pixel`: the irradiance found
+// (rgb) and the share of the hemisphere it covers (a); `valid` tells whether there is one.
+fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<f32> {
+    *valid = false;
     if params.history == 0u || !(s.depth > 0.0) {
         return vec4<f32>(0.0);
     }
@@ -105,10 +131,11 @@ fn history_at(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     let z0 = prev_vis0[2u * q + 1u];
     let near0 = z0 != VIS_EMPTY && abs(d - bitcast<f32>(z0)) <= params.tolerance;
     let h = history_in[q];
-    if !near0 || !finite3(h.rgb) {
+    if !near0 || !finite3(h.rgb) || !(h.a >= 0.0 && h.a <= 1.0) {
         return vec4<f32>(0.0);
     }
-    return vec4<f32>(h.rgb, 1.0);
+    *valid = true;
+    return h;
 }
 
 @compute @workgroup_size(8, 8)
@@ -120,7 +147,12 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s0 = sample0(p);
     var out0 = vec3<f32>(0.0);
     if s0.depth > 0.0 {
-        let e = history_at(gid.xy, s0).rgb;
+        // The next bounce spreads what the gather found over the whole hemisphere: E / c, pi
+        // times the weighted mean radiance of the surfaces it saw (directions it did not cover
+        // take their mean; at most pi max B, so the feedback gain bounds it).
+        var valid = false;
+        let h = history_at(gid.xy, s0, &valid);
+        let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
         out0 = boost(s0.base_color) * (direct0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.base_color / PI_R * e) + s0.emissive;
     }
     let s1 = sample1(p);
@@ -134,25 +166,67 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 const PI_R: f32 = 3.14159265;
 
-@compute @workgroup_size(8, 8)
-fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
-        return;
+// The `slices` gather at `pixel` (layer-0 sample s): irradiance and confidence.
+fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
+    let c = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
+    let r_px = params.radius * pixels_per_unit(frame, s.depth);
+    let slices = max(params.slices, 1u);
+    let steps = max(params.samples / (2u * slices), 1u);
+    let spacing = r_px / f32(steps);
+    let noise = slice_noise(pixel, params.turn);
+    var seen = vec3<f32>(0.0);
+    var covered = 0.0;
+    for (var k = 0u; k < slices; k++) {
+        let sl = slice_at(k, slices, noise, c, n);
+        if !(sl.weight > 0.0) {
+            continue;
+        }
+        var occupied = 0u;
+        var sum = vec3<f32>(0.0);
+        for (var j = 0u; j < steps; j++) {
+            let h = spacing * (f32(j) + noise.y);
+            for (var side = 0u; side < 2u; side++) {
+                let along = select(1.0, -1.0, side == 1u);
+                let tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + along * h * sl.dir));
+                if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) || all(vec2<u32>(tap) == pixel) {
+                    continue;
+                }
+                let q = u32(tap.y) * frame.width + u32(tap.x);
+                let at = vec2<f32>(tap) + 0.5;
+                let z0 = sample0(q).depth;
+                if !(z0 > 0.0) {
+                    continue;
+                }
+                let z1 = sample1(q).depth;
+                let backs = solid_backs(z0, z1, params.thickness);
+                var front2 = 0.0;
+                var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);
+                sum += b0[q].rgb * f32(countOneBits(bits & ~occupied));
+                occupied |= bits;
+                if z1 > z0 {
+                    bits = solid_sectors(sl, c, n, at, along, z1, backs.y, 0.0, params.radius, &front2);
+                    sum += b1[q].rgb * f32(countOneBits(bits & ~occupied));
+                    occupied |= bits;
+                }
+            }
+        }
+        seen += sl.weight * sum / f32(SECTORS);
+        covered += sl.weight * f32(countOneBits(occupied)) / f32(SECTORS);
     }
-    let p = gid.y * frame.width + gid.x;
-    let s = sample0(p);
-    if !(s.depth > 0.0) || params.samples == 0u {
-        raw[p] = vec4<f32>(0.0);
-        return;
-    }
-    let c = view_position(frame, vec2<f32>(gid.xy) + 0.5, s.depth);
+    return vec4<f32>(PI_R * seen / f32(slices), min(covered / f32(slices), 1.0));
+}
+
+// The `spiral` gather at `pixel` (layer-0 sample s): irradiance and confidence.
+fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
+    let c = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
     let r_px = params.radius * pixels_per_unit(frame, s.depth);
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     var m = 0u;
     for (var i = 0u; i < params.samples; i++) {
-        let tap = spiral_tap_turned(gid.xy, i, params.samples, r_px, params.turn);
+        let tap = spiral_tap_turned(pixel, i, params.samples, r_px, params.turn);
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }
@@ -198,7 +272,26 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
             e = 2.0 * PI_R / f32(m) * sum;
         }
     }
-    raw[p] = vec4<f32>(e, f32(m) / f32(params.samples));
+    let confidence = f32(m) / f32(params.samples);
+    return vec4<f32>(e * confidence, confidence);
+}
+
+@compute @workgroup_size(8, 8)
+fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let s = sample0(p);
+    if !(s.depth > 0.0) || params.samples == 0u {
+        raw[p] = vec4<f32>(0.0);
+        return;
+    }
+#if SLICES
+    raw[p] = slices_gather(gid.xy, s);
+#else
+    raw[p] = spiral_gather(gid.xy, s);
+#endif
 }
 
 @compute @workgroup_size(8, 8)
@@ -209,9 +302,10 @@ fn radiosity_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = gid.y * frame.width + gid.x;
     let current = raw[p];
     var e = select(vec4<f32>(0.0), current, finite3(current.rgb) && abs(current.a) <= 1.0);
-    let h = history_at(gid.xy, sample0(p));
-    if h.a > 0.0 {
-        e = vec4<f32>(mix(e.rgb, h.rgb, params.alpha), e.a);
+    var valid = false;
+    let h = history_at(gid.xy, sample0(p), &valid);
+    if valid {
+        e = mix(e, h, params.alpha);
     }
     history_out[p] = select(vec4<f32>(0.0), e, finite3(e.rgb));
 }

@@ -5,7 +5,8 @@ use glam::Vec3;
 use crate::gbuffer::GSample;
 
 /// DIRECT + AV * AMBIENT + RADIOSITY + emission per pixel; the sky where there is no surface.
-/// `radiosity` is the irradiance (rgb) and confidence (w) per pixel.
+/// `radiosity` is the irradiance the gather found (rgb) and the share of the hemisphere it
+/// covers (w) per pixel.
 pub fn composite(
     layer: &[GSample],
     direct: &[Vec3],
@@ -24,9 +25,8 @@ pub fn composite(
             let (e, confidence) =
                 radiosity.map_or((Vec3::ZERO, 0.0), |r| (r[p].truncate(), r[p].w.clamp(0.0, 1.0)));
             let albedo = (1.0 - s.metallic) * s.base_color;
-            let reflected = albedo
-                * (confidence / std::f32::consts::PI * e
-                    + (1.0 - confidence) * visibility * ambient);
+            let reflected =
+                albedo * (e / std::f32::consts::PI + (1.0 - confidence) * visibility * ambient);
             direct[p] + reflected + s.emissive
         })
         .collect()

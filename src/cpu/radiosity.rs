@@ -6,6 +6,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
 use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
 use crate::frame::FrameUniform;
 use crate::frame::RadiosityUniform;
@@ -35,7 +36,8 @@ pub fn feedback_without_history(
         .collect()
 }
 
-/// The gathered irradiance (rgb) and confidence (w) of every layer-0 pixel.
+/// The gathered irradiance (rgb) and confidence (w) of every layer-0 pixel, by the estimator
+/// `u.estimator` names.
 pub fn gather(
     f: &FrameUniform,
     u: &RadiosityUniform,
@@ -48,6 +50,10 @@ pub fn gather(
             let p = (y * f.width + x) as usize;
             let s = &layers[0][p];
             if s.depth.is_nan() || s.depth <= 0.0 || u.samples == 0 {
+                continue;
+            }
+            if u.estimator == 1 {
+                out[p] = slices_gather(f, u, layers, b, (x, y));
                 continue;
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
@@ -90,8 +96,69 @@ pub fn gather(
                 (_, 0) => PI * sum / weight,
                 _ => 2.0 * PI / m as f32 * sum,
             };
-            out[p] = e.extend(m as f32 / u.samples as f32);
+            let confidence = m as f32 / u.samples as f32;
+            out[p] = (e * confidence).extend(confidence);
         }
     }
     out
+}
+
+/// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
+fn slices_gather(
+    f: &FrameUniform,
+    u: &RadiosityUniform,
+    layers: [&[GSample]; 2],
+    b: [&[Vec3]; 2],
+    (x, y): (u32, u32),
+) -> Vec4 {
+    let s = &layers[0][(y * f.width + x) as usize];
+    let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+    let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
+    let r_px = u.radius * pixels_per_unit(f, s.depth);
+    let slices = u.slices.max(1);
+    let steps = (u.samples / (2 * slices)).max(1);
+    let spacing = r_px / steps as f32;
+    let noise = slice_noise(x, y, u.turn);
+    let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
+    for k in 0..slices {
+        let sl = Slice::at(f, k, slices, noise, c, n);
+        if sl.weight.is_nan() || sl.weight <= 0.0 {
+            continue;
+        }
+        let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
+        for j in 0..steps {
+            let h = spacing * (j as f32 + noise.1);
+            for side in [1.0, -1.0] {
+                let t = (Vec2::new(x as f32, y as f32) + 0.5 + side * h * sl.dir).floor();
+                let (tx, ty) = (t.x as i32, t.y as i32);
+                if tx < 0
+                    || ty < 0
+                    || tx >= f.width as i32
+                    || ty >= f.height as i32
+                    || (tx as u32, ty as u32) == (x, y)
+                {
+                    continue;
+                }
+                let q = (ty as u32 * f.width + tx as u32) as usize;
+                let at = t + 0.5;
+                let z0 = layers[0][q].depth;
+                if z0.is_nan() || z0 <= 0.0 {
+                    continue;
+                }
+                let z1 = layers[1][q].depth;
+                let (back0, back1) = solid_backs(z0, z1, u.thickness);
+                let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
+                sum += b[0][q] * (bits & !occupied).count_ones() as f32;
+                occupied |= bits;
+                if z1 > z0 {
+                    let (bits, _) = sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
+                    sum += b[1][q] * (bits & !occupied).count_ones() as f32;
+                    occupied |= bits;
+                }
+            }
+        }
+        seen += sl.weight * sum / SECTORS as f32;
+        covered += sl.weight * occupied.count_ones() as f32 / SECTORS as f32;
+    }
+    (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
 }

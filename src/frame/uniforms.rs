@@ -4,7 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::{PyramidLayout, mirrored};
-use crate::settings::{AoEstimator, AoSettings, Normalization, RadiositySettings};
+use crate::settings::{
+    AoEstimator, AoSettings, Normalization, RadiosityEstimator, RadiositySettings,
+};
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
 #[repr(C)]
@@ -89,8 +91,15 @@ pub struct RadiosityUniform {
     pub boost_unsaturated: f32,
     /// [`Boost::saturated`](crate::settings::Boost).
     pub boost_saturated: f32,
+    /// Slices per pixel (`slices` gather).
+    pub slices: u32,
+    /// [`RadiositySettings::thickness`] times the radius, in scene units.
+    pub thickness: f32,
+    /// 0: [`RadiosityEstimator::Spiral`], 1: [`RadiosityEstimator::Slices`] (the kernel is
+    /// chosen by define; the CPU reference reads this).
+    pub estimator: u32,
     /// Padding to 16 bytes.
-    pub pad: u32,
+    pub _pad: [u32; 2],
 }
 
 mirrored!(
@@ -108,7 +117,10 @@ mirrored!(
         turn,
         normalization,
         boost_unsaturated,
-        boost_saturated
+        boost_saturated,
+        slices,
+        thickness,
+        estimator
     ]
 );
 
@@ -131,7 +143,13 @@ impl RadiosityUniform {
             },
             boost_unsaturated: s.boost.unsaturated,
             boost_saturated: s.boost.saturated,
-            pad: 0,
+            slices: s.slices,
+            thickness: s.thickness * s.radius,
+            estimator: match s.estimator {
+                RadiosityEstimator::Spiral => 0,
+                RadiosityEstimator::Slices => 1,
+            },
+            _pad: [0; 2],
         }
     }
 }

@@ -5,7 +5,7 @@ use super::{FrameContext, Recorder, Stage};
 use crate::frame::RadiosityUniform;
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
-use crate::settings::Settings;
+use crate::settings::{RadiosityEstimator, Settings};
 
 /// The radiosity's buffers, all `vec4<f32>` per pixel, as
 /// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them.
@@ -110,7 +110,10 @@ impl Stage for RadiosityStage {
             (slot::HISTORY_OUT, history_out),
             (slot::PREV_VIS0, ctx.raster.previous_vis0()),
         ];
-        let defines = ctx.settings.precision.defines();
+        let mut defines = ctx.settings.precision.defines();
+        if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
+            defines.push("SLICES");
+        }
         let run = |pass: &mut wgpu::ComputePass<'_>, entry| {
             let pipeline = ctx.pipelines.get(ctx.device, "radiosity", entry, &defines, &[]);
             pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());

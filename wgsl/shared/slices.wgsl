@@ -30,11 +30,19 @@ struct Slice {
     offset: f32,
 }
 
-// A pixel's turn of the slices, jitter of the steps and offset of the sectors, from its hash,
-// moved on by `frame_turn` golden-ratio steps (temporal accumulation sees other slices).
+// A pixel's turn of the slices, jitter of the steps and offset of the sectors, moved on by
+// `frame_turn` golden-ratio steps (temporal accumulation sees other slices). The turn follows a
+// 4x4 Bayer pattern (plus a little of the pixel's hash, so that the pattern does not show), so
+// that every 4x4 block, and so every blur window, holds 16 evenly spread turns: a bright source
+// that one pixel's slices happen to cross is not a lone outlier the blur would spread into a
+// blot. The jitter and offset come from the pixel's hash.
 fn slice_noise(pixel: vec2<u32>, frame_turn: u32) -> vec3<f32> {
     let hash = pixel_hash(pixel);
-    let turn = fract(f32(hash >> 20u) / 4096.0 + f32(frame_turn % 4096u) * 0.618034);
+    let b = pixel & vec2<u32>(3u);
+    // The 4x4 Bayer matrix, row by row: 0 8 2 10 / 12 4 14 6 / 3 11 1 9 / 15 7 13 5.
+    let bayer = ((b.x & 1u) << 3u | (b.y & 1u) << 2u | (b.x >> 1u) << 1u | (b.y >> 1u)) ^ ((b.y & 1u) << 3u | (b.y >> 1u) << 1u);
+    let within = f32(hash >> 24u) / 256.0;
+    let turn = fract((f32(bayer) + within) / 16.0 + f32(frame_turn % 4096u) * 0.618034);
     let jitter = f32((hash >> 8u) & 0xfffu) / 4096.0;
     let offset = f32(hash & 0xffu) / 256.0 + 0.5 / 256.0;
     return vec3<f32>(turn, jitter, offset);
