@@ -101,15 +101,29 @@ fn obscurance(c: vec3<f32>, n: vec3<f32>, y: vec3<f32>) -> f32 {
     return max(1.0 - vv / r2, 0.0) * max((dot(v, n) - ao.bias) / sqrt(vv + 1e-4 * r2), 0.0);
 }
 
-fn visibility(pixel: vec2<u32>) -> f32 {
+// The shading point of `pixel`: view-space position and normal, and the radius in pixels (0
+// where there is nothing to obscure).
+struct Centre {
+    c: vec3<f32>,
+    n: vec3<f32>,
+    r_px: f32,
+}
+
+fn centre(pixel: vec2<u32>) -> Centre {
+    var out: Centre;
     let p = pixel.y * frame.width + pixel.x;
     let z = pyramid0[p];
     if !(z > 0.0) || ao.samples == 0u || !(ao.radius > 0.0) {
-        return 1.0;
+        out.r_px = 0.0;
+        return out;
     }
-    let c = view_position(frame, vec2<f32>(pixel) + 0.5, z);
-    let n = normalize(mat_mul(frame.view, vec4<f32>(normal_at(p), 0.0)).xyz);
-    let r_px = ao.radius * pixels_per_unit(frame, z);
+    out.c = view_position(frame, vec2<f32>(pixel) + 0.5, z);
+    out.n = normalize(mat_mul(frame.view, vec4<f32>(normal_at(p), 0.0)).xyz);
+    out.r_px = ao.radius * pixels_per_unit(frame, z);
+    return out;
+}
+
+fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     var sum = 0.0;
     for (var i = 0u; i < ao.samples; i++) {
         let h = spiral_distance(i, ao.samples, r_px);
@@ -144,15 +158,7 @@ fn pyramid_texel(tap: vec2<i32>, level: u32, index: ptr<function, u32>) -> vec2<
     return vec2<f32>(texel_origin(level, t)) + 0.5;
 }
 
-fn slice_visibility(pixel: vec2<u32>) -> f32 {
-    let p = pixel.y * frame.width + pixel.x;
-    let z = pyramid0[p];
-    if !(z > 0.0) || ao.samples == 0u || !(ao.radius > 0.0) {
-        return 1.0;
-    }
-    let c = view_position(frame, vec2<f32>(pixel) + 0.5, z);
-    let n = normalize(mat_mul(frame.view, vec4<f32>(normal_at(p), 0.0)).xyz);
-    let r_px = ao.radius * pixels_per_unit(frame, z);
+fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     let slices = max(ao.slices, 1u);
     let steps = max(ao.samples / (2u * slices), 1u);
     let spacing = r_px / f32(steps);
@@ -171,8 +177,8 @@ fn slice_visibility(pixel: vec2<u32>) -> f32 {
             let h = spacing * (f32(j) + noise.y);
             for (var side = 0u; side < 2u; side++) {
                 let along = select(1.0, -1.0, side == 1u);
-                let tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + along * h * sl.dir));
-                if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) || all(vec2<u32>(tap) == pixel) {
+                var tap: vec2<i32>;
+                if !slice_tap(pixel, sl, h, along, &tap) {
                     continue;
                 }
                 var q = 0u;
@@ -207,9 +213,14 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
         return;
     }
+    let x = centre(gid.xy);
+    var v = 1.0;
+    if x.r_px > 0.0 {
 #if SLICES
-    av[gid.y * frame.width + gid.x] = slice_visibility(gid.xy);
+        v = slice_visibility(gid.xy, x.c, x.n, x.r_px);
 #else
-    av[gid.y * frame.width + gid.x] = visibility(gid.xy);
+        v = visibility(gid.xy, x.c, x.n, x.r_px);
 #endif
+    }
+    av[gid.y * frame.width + gid.x] = v;
 }

@@ -188,8 +188,8 @@ fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
             let h = spacing * (f32(j) + noise.y);
             for (var side = 0u; side < 2u; side++) {
                 let along = select(1.0, -1.0, side == 1u);
-                let tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + along * h * sl.dir));
-                if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) || all(vec2<u32>(tap) == pixel) {
+                var tap: vec2<i32>;
+                if !slice_tap(pixel, sl, h, along, &tap) {
                     continue;
                 }
                 let q = u32(tap.y) * frame.width + u32(tap.x);

@@ -155,18 +155,11 @@ impl Slices<'_> {
             for j in 0..steps {
                 let h = spacing * (j as f32 + noise.1);
                 for side in [1.0, -1.0] {
-                    let t = (Vec2::new(x as f32, y as f32) + 0.5 + side * h * sl.dir).floor();
-                    let (tx, ty) = (t.x as i32, t.y as i32);
-                    if tx < 0
-                        || ty < 0
-                        || tx >= f.width as i32
-                        || ty >= f.height as i32
-                        || (tx as u32, ty as u32) == (x, y)
-                    {
+                    let Some((tx, ty)) = sl.tap(f, (x, y), h, side) else {
                         continue;
-                    }
+                    };
                     let l = self.layout.levels[level];
-                    let texel = ((tx as u32) >> level, (ty as u32) >> level);
+                    let texel = (tx >> level, ty >> level);
                     let q = (l.offset + texel.1 * l.width + texel.0) as usize;
                     let origin = texel_origin(self.layout, level, texel);
                     let at = Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5;

@@ -129,18 +129,11 @@ fn slices_gather(
         for j in 0..steps {
             let h = spacing * (j as f32 + noise.1);
             for side in [1.0, -1.0] {
-                let t = (Vec2::new(x as f32, y as f32) + 0.5 + side * h * sl.dir).floor();
-                let (tx, ty) = (t.x as i32, t.y as i32);
-                if tx < 0
-                    || ty < 0
-                    || tx >= f.width as i32
-                    || ty >= f.height as i32
-                    || (tx as u32, ty as u32) == (x, y)
-                {
+                let Some((tx, ty)) = sl.tap(f, (x, y), h, side) else {
                     continue;
-                }
-                let q = (ty as u32 * f.width + tx as u32) as usize;
-                let at = t + 0.5;
+                };
+                let q = (ty * f.width + tx) as usize;
+                let at = Vec2::new(tx as f32, ty as f32) + 0.5;
                 let z0 = layers[0][q].depth;
                 if z0.is_nan() || z0 <= 0.0 {
                     continue;

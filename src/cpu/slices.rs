@@ -102,6 +102,21 @@ impl Slice {
         Slice { dir, v, gamma, total, weight, offset: noise.2 }
     }
 
+    /// As `slice_tap`: the pixel of the step at `h` pixels on `side` (+-1) of the slice through
+    /// pixel `(x, y)`, if it lies on screen and is not that pixel.
+    pub fn tap(
+        &self,
+        f: &FrameUniform,
+        (x, y): (u32, u32),
+        h: f32,
+        side: f32,
+    ) -> Option<(u32, u32)> {
+        let t = (Vec2::new(x as f32, y as f32) + 0.5 + side * h * self.dir).floor();
+        let (tx, ty) = (t.x as i32, t.y as i32);
+        let inside = tx >= 0 && ty >= 0 && tx < f.width as i32 && ty < f.height as i32;
+        (inside && (tx as u32, ty as u32) != (x, y)).then_some((tx as u32, ty as u32))
+    }
+
     /// As `angle_in`.
     fn angle(&self, d: Vec3, side: f32) -> f32 {
         side * (d.dot(self.v) / d.length().max(1e-30)).clamp(-1.0, 1.0).acos()

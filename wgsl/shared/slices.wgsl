@@ -48,6 +48,14 @@ fn slice_noise(pixel: vec2<u32>, frame_turn: u32) -> vec3<f32> {
     return vec3<f32>(turn, jitter, offset);
 }
 
+// The pixel of the step at `h` pixels on `side` (+-1) of slice `sl` through `pixel`, and
+// whether it lies on screen and is not `pixel` itself.
+fn slice_tap(pixel: vec2<u32>, sl: Slice, h: f32, side: f32, tap: ptr<function, vec2<i32>>) -> bool {
+    *tap = vec2<i32>(floor(vec2<f32>(pixel) + 0.5 + side * h * sl.dir));
+    let t = *tap;
+    return all(t >= vec2<i32>(0)) && t.x < i32(frame.width) && t.y < i32(frame.height) && any(vec2<u32>(t) != pixel);
+}
+
 // Antiderivative of cos(t - gamma) sin(t).
 fn arc_f(t: f32, gamma: f32) -> f32 {
     return -0.25 * cos(2.0 * t - gamma) + 0.5 * t * sin(gamma);
