@@ -19,7 +19,8 @@
 //     AV = 1 - intensity (1/pi) integral over the hemisphere of f(d(w)) cos(theta) dw,
 //     f(d) = max(1 - d^2/r^2, 0), d(w): distance to the first surface in direction w,
 // as the ground truth defines it, over the slices of shared/slices.wgsl: steps spaced evenly
-// out to the projected radius read the pyramid level whose texels match their spacing, each
+// out to the projected radius read the pyramid as `sao` does (level floor(log2 h) - mip_offset
+// for a step h pixels away), but never a level coarser than the step spacing; each
 // layer's point there hides the arc of its solid (`thickness` deep, no deeper than layer 1's
 // surface, for `bitmask`; without end, a height field, for `horizon`: thickness 0), and the
 // sectors it hides first count at the falloff of its own distance (the surface is what those
@@ -182,7 +183,8 @@ fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> 
                     continue;
                 }
                 var q = 0u;
-                let at = pyramid_texel(tap, level, &q);
+                let step_level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(level)));
+                let at = pyramid_texel(tap, step_level, &q);
                 let z0 = pyramid0[q];
                 if !(z0 > 0.0) {
                     continue;

@@ -158,10 +158,14 @@ impl Slices<'_> {
                     let Some((tx, ty)) = sl.tap(f, (x, y), h, side) else {
                         continue;
                     };
-                    let l = self.layout.levels[level];
-                    let texel = (tx >> level, ty >> level);
+                    // Finer levels for the near steps, as `sao` reads them, never coarser
+                    // than the step spacing.
+                    let step_level = ((h.max(1.0).log2().floor() as i32) - s.mip_offset as i32)
+                        .clamp(0, level as i32) as usize;
+                    let l = self.layout.levels[step_level];
+                    let texel = (tx >> step_level, ty >> step_level);
                     let q = (l.offset + texel.1 * l.width + texel.0) as usize;
-                    let origin = texel_origin(self.layout, level, texel);
+                    let origin = texel_origin(self.layout, step_level, texel);
                     let at = Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5;
                     let z0 = self.pyramid0[q];
                     if z0.is_nan() || z0 <= 0.0 {
