@@ -89,6 +89,12 @@ fn render_with_camera_and_options() {
             "int32",
             "--dz",
             "0.1",
+            "--ao-estimator",
+            "horizon",
+            "--ao-slices",
+            "3",
+            "--radiosity-estimator",
+            "spiral",
             "--out",
         ])
         .arg(dir.join("grid.png"))
@@ -118,6 +124,9 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--camera".into(), "up=0,0,0".into()], "up is zero"),
         (vec!["render".into(), "--boost".into(), "4,4".into()], "gain"),
         (vec!["render".into(), "--max-triangles".into(), "10".into()], "limit"),
+        (vec!["render".into(), "--ao-slices".into(), "0".into()], "ao.slices"),
+        (vec!["render".into(), "--ao-thickness=-1".into()], "ao.thickness"),
+        (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
     ];
     for (args, needle) in cases {
         let out = cli().args(&args).output().unwrap();
