@@ -51,7 +51,7 @@ impl Precision {
 #[derive(serde::Serialize)]
 pub enum AoEstimator {
     /// Scalable Ambient Obscurance's sum over spiral taps (each layer's larger term), with its
-    /// normalisation `2 / N`: biased low in creases and contacts whatever the tap count.
+    /// normalisation `2 / N`: it under-occludes creases and contacts whatever the tap count.
     Sao,
     /// Slices through the view direction, each marching the depth pyramid on both sides; every
     /// surface seen is a height field (solid behind it). The cosine-weighted arc each tap hides
@@ -269,8 +269,8 @@ pub struct RadiositySettings {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[derive(serde::Serialize)]
 pub enum RadiosityEstimator {
-    /// Spiral taps, each counted at the cosine of its direction ([`Normalization`]), with a
-    /// confidence M / N that hands the rest of the hemisphere to the ambient term.
+    /// Spiral taps, each counted at the cosine of its direction (as `Normalization` says), with
+    /// a confidence M / N that hands the rest of the hemisphere to the ambient term.
     Spiral,
     /// The slices of the obscurance's `bitmask` estimator: each surface a step finds gives its
     /// radiance to the directions it hides first, at their true cosine-weighted solid angle
