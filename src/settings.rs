@@ -176,6 +176,15 @@ impl Default for AoSettings {
 }
 
 impl AoSettings {
+    /// How deep an occluder's solid reaches behind its surface, in scene units: `thickness`
+    /// times the radius for `bitmask`, 0 (without end) for `horizon` (and unused by `sao`).
+    pub fn solid_depth(&self) -> f32 {
+        match self.estimator {
+            AoEstimator::Bitmask => self.thickness * self.radius,
+            AoEstimator::Horizon | AoEstimator::Sao => 0.0,
+        }
+    }
+
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
         if !(self.radius.is_finite() && self.radius > 0.0) {
@@ -251,14 +260,16 @@ pub struct RadiositySettings {
     /// along the previous view axis) of the previous layer 0, whose irradiance the history
     /// holds (a point hidden last frame has no history).
     pub history_tolerance: f32,
-    /// Count a tap only if its surface faces the gathering point (w.n_Y < 0).
+    /// Count a tap only if its surface faces the gathering point (w.n_Y < 0; `spiral` only: the
+    /// slices take every surface they find as solid).
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,
-    /// Turn the tap spiral every frame, so the temporal filter averages different taps (less
-    /// noise, a little flicker); off, a static camera converges to a fixed point.
+    /// Turn the tap spiral (or the slices) every frame, so the temporal filter averages
+    /// different taps (less noise, a little flicker); off, a static camera converges to a fixed
+    /// point.
     pub jitter: bool,
-    /// How the counted taps are normalised into irradiance.
+    /// How the counted taps are normalised into irradiance (`spiral` only).
     pub normalization: Normalization,
     /// Colour boost of the light a surface reflects into B; [`Boost::ONE`] conserves energy.
     pub boost: Boost,

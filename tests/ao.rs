@@ -12,8 +12,10 @@ use glam::Vec3;
 
 /// A tap's pixel comes from floor(position + r cos/sin); the GPU's cos, sin and log2 differ from
 /// Rust's in the last bits, so a tap lying within an ulp of a pixel border can land on the
-/// neighbouring pixel and change that pixel's AV by up to 2 * intensity / N. Such pixels must
-/// stay rare; every other pixel agrees to f32 rounding.
+/// neighbouring pixel and change that pixel's AV by up to 2 * intensity / N. The slice
+/// estimators' acos, atan2 and arc weights differ the same way, so a direction within an ulp of
+/// a sector's centre can fall in the next sector (one sector of 32, at its falloff). Such pixels
+/// must stay rare; every other pixel agrees to f32 rounding.
 const AO_TOLERANCE: f32 = 1e-4;
 const AO_FLIPPED_FRACTION: f64 = 0.01;
 

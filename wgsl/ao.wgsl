@@ -124,6 +124,18 @@ fn centre(pixel: vec2<u32>) -> Centre {
     return out;
 }
 
+// The pyramid texel of `level` under pixel `tap`: its index and the pixel centre it came from.
+fn pyramid_texel(tap: vec2<i32>, level: u32, index: ptr<function, u32>) -> vec2<f32> {
+    let t = vec2<u32>(tap) >> vec2<u32>(level);
+    *index = level_offset(level) + t.y * level_size(level).x + t.x;
+    return vec2<f32>(texel_origin(level, t)) + 0.5;
+}
+
+// The pyramid level a tap h pixels away reads: floor(log2 h) - mip_offset, at most `coarsest`.
+fn tap_level(h: f32, coarsest: u32) -> u32 {
+    return u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(coarsest)));
+}
+
 fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     var sum = 0.0;
     for (var i = 0u; i < ao.samples; i++) {
@@ -132,10 +144,8 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }
-        let level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(ao.levels) - 1));
-        let t = vec2<u32>(tap) >> vec2<u32>(level);
-        let q = level_offset(level) + t.y * level_size(level).x + t.x;
-        let at = vec2<f32>(texel_origin(level, t)) + 0.5;
+        var q = 0u;
+        let at = pyramid_texel(tap, tap_level(h, ao.levels - 1u), &q);
         var o = 0.0;
         let z0 = pyramid0[q];
         if z0 > 0.0 {
@@ -152,12 +162,6 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     return clamp(1.0 - ao.intensity * 2.0 / f32(ao.samples) * sum, 0.0, 1.0);
 }
 
-// The pyramid texel of `level` under pixel `tap`: its index and the pixel centre it came from.
-fn pyramid_texel(tap: vec2<i32>, level: u32, index: ptr<function, u32>) -> vec2<f32> {
-    let t = vec2<u32>(tap) >> vec2<u32>(level);
-    *index = level_offset(level) + t.y * level_size(level).x + t.x;
-    return vec2<f32>(texel_origin(level, t)) + 0.5;
-}
 
 fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     let slices = max(ao.slices, 1u);
@@ -176,6 +180,9 @@ fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> 
         var hidden = 0.0;
         for (var j = 0u; j < steps; j++) {
             let h = spacing * (f32(j) + noise.y);
+            // Finer levels for the near steps, as `sao` reads them, never coarser than the step
+            // spacing.
+            let step_level = tap_level(h, level);
             for (var side = 0u; side < 2u; side++) {
                 let along = select(1.0, -1.0, side == 1u);
                 var tap: vec2<i32>;
@@ -183,7 +190,6 @@ fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> 
                     continue;
                 }
                 var q = 0u;
-                let step_level = u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(level)));
                 let at = pyramid_texel(tap, step_level, &q);
                 let z0 = pyramid0[q];
                 if !(z0 > 0.0) {

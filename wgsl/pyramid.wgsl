@@ -29,12 +29,7 @@ fn pyramid_base(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = gid.y * level.dst_width + gid.x;
-#if PACKED
-    let depth = bitcast<f32>(gbuffer[p * G_WORDS].x);
-#else
-    let depth = gbuffer[p * G_WORDS].x;
-#endif
-    pyramid[level.dst_offset + p] = depth;
+    pyramid[level.dst_offset + p] = gword_depth(gbuffer[p * G_WORDS]);
 }
 
 @compute @workgroup_size(8, 8)

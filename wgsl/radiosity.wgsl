@@ -194,11 +194,11 @@ fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
                 }
                 let q = u32(tap.y) * frame.width + u32(tap.x);
                 let at = vec2<f32>(tap) + 0.5;
-                let z0 = sample0(q).depth;
+                let z0 = gword_depth(gbuffer0[q * G_WORDS]);
                 if !(z0 > 0.0) {
                     continue;
                 }
-                let z1 = sample1(q).depth;
+                let z1 = gword_depth(gbuffer1[q * G_WORDS]);
                 let backs = solid_backs(z0, z1, params.thickness);
                 var front2 = 0.0;
                 var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);

@@ -40,76 +40,23 @@ pub fn ao(
     pyramid0: &[f32],
     pyramid1: Option<&[f32]>,
 ) -> Vec<f32> {
-    match s.estimator {
-        AoEstimator::Sao => sao(f, s, layer0, layout, pyramid0, pyramid1),
-        AoEstimator::Horizon | AoEstimator::Bitmask => {
-            let slices = Slices { f, s, layout, pyramid0, pyramid1 };
-            let mut out = vec![1.0; (f.width * f.height) as usize];
-            for y in 0..f.height {
-                for x in 0..f.width {
-                    let p = (y * f.width + x) as usize;
-                    out[p] = slices.visibility(x, y, layer0[p].normal);
-                }
-            }
-            out
-        }
-    }
-}
-
-/// AV of every pixel by Scalable Ambient Obscurance's sum.
-fn sao(
-    f: &FrameUniform,
-    s: &AoSettings,
-    layer0: &[GSample],
-    layout: &PyramidLayout,
-    pyramid0: &[f32],
-    pyramid1: Option<&[f32]>,
-) -> Vec<f32> {
+    let kernel = Kernel { f, s, layout, pyramid0, pyramid1 };
     let mut out = vec![1.0; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
             let p = (y * f.width + x) as usize;
-            let z = pyramid0[p];
-            if z.is_nan() || z <= 0.0 || s.samples == 0 || s.radius.is_nan() || s.radius <= 0.0 {
-                continue;
-            }
-            let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, z);
-            let n = mat_mul(&f.view, layer0[p].normal.extend(0.0).to_array()).xyz().normalize();
-            let r_px = s.radius * pixels_per_unit(f, z);
-            let mut sum = 0.0;
-            for i in 0..s.samples {
-                let h = spiral_distance(i, s.samples, r_px);
-                let (tx, ty) = spiral_tap(x, y, i, s.samples, r_px);
-                if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
-                    continue;
-                }
-                let level = ((h.max(1.0).log2().floor() as i32) - s.mip_offset as i32)
-                    .clamp(0, layout.levels.len() as i32 - 1) as usize;
-                let l = layout.levels[level];
-                let q =
-                    (l.offset + ((ty as u32) >> level) * l.width + ((tx as u32) >> level)) as usize;
-                let origin =
-                    texel_origin(layout, level, ((tx as u32) >> level, (ty as u32) >> level));
-                let at = Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5;
-                let mut o = 0.0f32;
-                if pyramid0[q] > 0.0 {
-                    o = obscurance(s, c, n, view_position(f, at, pyramid0[q]));
-                }
-                if let Some(p1) = pyramid1
-                    && p1[q] > 0.0
-                {
-                    o = o.max(obscurance(s, c, n, view_position(f, at, p1[q])));
-                }
-                sum += o;
-            }
-            out[p] = (1.0 - s.intensity * 2.0 / s.samples as f32 * sum).clamp(0.0, 1.0);
+            let Some((c, n, r_px)) = kernel.centre(x, y, layer0[p].normal) else { continue };
+            out[p] = match s.estimator {
+                AoEstimator::Sao => kernel.sao((x, y), c, n, r_px),
+                AoEstimator::Horizon | AoEstimator::Bitmask => kernel.slices((x, y), c, n, r_px),
+            };
         }
     }
     out
 }
 
-/// The `horizon` and `bitmask` estimators (`slice_visibility`).
-struct Slices<'a> {
+/// What `wgsl/ao.wgsl` reads: the frame, the settings and the depth pyramids.
+struct Kernel<'a> {
     f: &'a FrameUniform,
     s: &'a AoSettings,
     layout: &'a PyramidLayout,
@@ -117,31 +64,72 @@ struct Slices<'a> {
     pyramid1: Option<&'a [f32]>,
 }
 
-impl Slices<'_> {
-    fn thickness(&self) -> f32 {
-        match self.s.estimator {
-            AoEstimator::Bitmask => self.s.thickness * self.s.radius,
-            _ => 0.0,
-        }
-    }
-
-    fn visibility(&self, x: u32, y: u32, normal: Vec3) -> f32 {
+impl Kernel<'_> {
+    /// As `centre`: the view-space point and normal of pixel `(x, y)` and the radius in pixels,
+    /// `None` where there is nothing to obscure.
+    fn centre(&self, x: u32, y: u32, normal: Vec3) -> Option<(Vec3, Vec3, f32)> {
         let (f, s) = (self.f, self.s);
-        let p = (y * f.width + x) as usize;
-        let z = self.pyramid0[p];
+        let z = self.pyramid0[(y * f.width + x) as usize];
         if z.is_nan() || z <= 0.0 || s.samples == 0 || s.radius.is_nan() || s.radius <= 0.0 {
-            return 1.0;
+            return None;
         }
         let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, z);
         let n = mat_mul(&f.view, normal.extend(0.0).to_array()).xyz().normalize();
-        let r_px = s.radius * pixels_per_unit(f, z);
+        Some((c, n, s.radius * pixels_per_unit(f, z)))
+    }
+
+    /// As `pyramid_texel`: the index of the texel of `level` under pixel `(tx, ty)` and the
+    /// centre of the pixel it came from.
+    fn pyramid_texel(&self, (tx, ty): (u32, u32), level: usize) -> (usize, Vec2) {
+        let l = self.layout.levels[level];
+        let texel = (tx >> level, ty >> level);
+        let origin = texel_origin(self.layout, level, texel);
+        let q = (l.offset + texel.1 * l.width + texel.0) as usize;
+        (q, Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5)
+    }
+
+    /// As `tap_level`: the pyramid level a tap `h` pixels away reads.
+    fn tap_level(&self, h: f32, coarsest: usize) -> usize {
+        ((h.max(1.0).log2().floor() as i32) - self.s.mip_offset as i32).clamp(0, coarsest as i32)
+            as usize
+    }
+
+    /// As `visibility`: Scalable Ambient Obscurance's sum.
+    fn sao(&self, (x, y): (u32, u32), c: Vec3, n: Vec3, r_px: f32) -> f32 {
+        let (f, s) = (self.f, self.s);
+        let mut sum = 0.0;
+        for i in 0..s.samples {
+            let h = spiral_distance(i, s.samples, r_px);
+            let (tx, ty) = spiral_tap(x, y, i, s.samples, r_px);
+            if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
+                continue;
+            }
+            let level = self.tap_level(h, self.layout.levels.len() - 1);
+            let (q, at) = self.pyramid_texel((tx as u32, ty as u32), level);
+            let mut o = 0.0f32;
+            if self.pyramid0[q] > 0.0 {
+                o = obscurance(s, c, n, view_position(f, at, self.pyramid0[q]));
+            }
+            if let Some(p1) = self.pyramid1
+                && p1[q] > 0.0
+            {
+                o = o.max(obscurance(s, c, n, view_position(f, at, p1[q])));
+            }
+            sum += o;
+        }
+        (1.0 - s.intensity * 2.0 / s.samples as f32 * sum).clamp(0.0, 1.0)
+    }
+
+    /// As `slice_visibility`: the `horizon` and `bitmask` estimators.
+    fn slices(&self, (x, y): (u32, u32), c: Vec3, n: Vec3, r_px: f32) -> f32 {
+        let (f, s) = (self.f, self.s);
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
         let spacing = r_px / steps as f32;
         let levels = self.layout.levels.len().min(8) as i32;
         let level = (spacing.max(1.0).log2().floor() as i32).clamp(0, levels - 1) as usize;
         let noise = slice_noise(x, y, 0);
-        let thickness = self.thickness();
+        let thickness = s.solid_depth();
         let r2 = s.radius * s.radius;
         let falloff = |front2: f32| (1.0 - front2 / r2).max(0.0);
         let mut total = 0.0;
@@ -154,19 +142,12 @@ impl Slices<'_> {
             let mut hidden = 0.0;
             for j in 0..steps {
                 let h = spacing * (j as f32 + noise.1);
+                // Finer levels for the near steps, as `sao` reads them, never coarser than the
+                // step spacing.
+                let step_level = self.tap_level(h, level);
                 for side in [1.0, -1.0] {
-                    let Some((tx, ty)) = sl.tap(f, (x, y), h, side) else {
-                        continue;
-                    };
-                    // Finer levels for the near steps, as `sao` reads them, never coarser
-                    // than the step spacing.
-                    let step_level = ((h.max(1.0).log2().floor() as i32) - s.mip_offset as i32)
-                        .clamp(0, level as i32) as usize;
-                    let l = self.layout.levels[step_level];
-                    let texel = (tx >> step_level, ty >> step_level);
-                    let q = (l.offset + texel.1 * l.width + texel.0) as usize;
-                    let origin = texel_origin(self.layout, step_level, texel);
-                    let at = Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5;
+                    let Some(tap) = sl.tap(f, (x, y), h, side) else { continue };
+                    let (q, at) = self.pyramid_texel(tap, step_level);
                     let z0 = self.pyramid0[q];
                     if z0.is_nan() || z0 <= 0.0 {
                         continue;

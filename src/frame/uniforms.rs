@@ -4,9 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::{PyramidLayout, mirrored};
-use crate::settings::{
-    AoEstimator, AoSettings, Normalization, RadiosityEstimator, RadiositySettings,
-};
+use crate::settings::{AoSettings, Normalization, RadiosityEstimator, RadiositySettings};
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
 #[repr(C)]
@@ -56,10 +54,7 @@ impl AoUniform {
             levels: layout.levels.len().min(8) as u32,
             mip_offset: settings.mip_offset,
             slices: settings.slices,
-            thickness: match settings.estimator {
-                AoEstimator::Bitmask => settings.thickness * settings.radius,
-                _ => 0.0,
-            },
+            thickness: settings.solid_depth(),
             offsets,
         }
     }

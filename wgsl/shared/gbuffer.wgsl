@@ -92,6 +92,11 @@ fn gbuffer_encode(s: GSample) -> array<vec4<u32>, 2> {
     );
 }
 
+// The view depth held by a sample's first word (0: no surface).
+fn gword_depth(w0: GWord) -> f32 {
+    return bitcast<f32>(w0.x);
+}
+
 fn gbuffer_decode(w0: vec4<u32>, w1: vec4<u32>) -> GSample {
     var s: GSample;
     s.depth = bitcast<f32>(w0.x);
@@ -118,6 +123,11 @@ fn gbuffer_encode(s: GSample) -> array<vec4<f32>, 4> {
         vec4<f32>(s.emissive, s.metallic),
         vec4<f32>(s.motion, s.reflectivity, f32(s.material)),
     );
+}
+
+// The view depth held by a sample's first word (0: no surface).
+fn gword_depth(w0: GWord) -> f32 {
+    return w0.x;
 }
 
 fn gbuffer_decode(w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>) -> GSample {
