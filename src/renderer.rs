@@ -115,8 +115,9 @@ pub struct Terms {
     /// Direct radiance of layer 0 (zero where no light runs).
     pub direct: Vec<Vec3>,
     /// The indirect irradiance the gather found (the surfaces it saw, over the share of the
-    /// hemisphere they cover); `None` without radiosity. The rest of the hemisphere, which no tap covered, is the ambient
-    /// term's; the ground truth of diffuse indirect light leaves the sky out the same way.
+    /// hemisphere they cover); `None` without radiosity. The rest of the hemisphere, which no
+    /// surface covered, is the ambient term's; the ground truth of diffuse indirect light
+    /// leaves the sky out the same way.
     pub indirect: Option<Vec<Vec3>>,
     /// The radiosity term the composite adds: the diffuse albedo / pi times `indirect`.
     pub radiosity: Option<Vec<Vec3>>,
