@@ -273,7 +273,8 @@ struct RenderArgs {
     #[arg(long)]
     camera: Option<String>,
     /// Write depth, normal and base colour of the layers the frame drew, and each lighting term
-    /// (ao, direct, radiosity), as PNG and EXR into this folder.
+    /// (ao, direct, radiosity, indirect, reflections; those the frame ran), as PNG and EXR into
+    /// this folder.
     #[arg(long)]
     layers: Option<PathBuf>,
     /// Write the HDR composite, tone mapped, as PNG.
@@ -754,11 +755,12 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         }
         // Each lighting term alone, tone mapped like the image: direct radiance, the radiosity
         // term as the composite adds it, and the indirect irradiance it comes from (what
-        // `truth --effect indirect` traces).
+        // `truth --effect indirect` traces), and the reflected radiance (`--effect reflections`).
         let lit = [
             ("direct", Some(&terms.direct)),
             ("radiosity", terms.radiosity.as_ref()),
             ("indirect", terms.indirect.as_ref()),
+            ("reflections", terms.reflections.as_ref()),
         ];
         for (name, term) in lit {
             let Some(term) = term else { continue };

@@ -206,7 +206,6 @@ impl Stages {
                 .map(ShadowStage::inputs),
             direct: [self.direct.radiance(0), self.direct.radiance(1)],
             av: self.ao.as_ref().filter(|_| runs(Effect::Ao)).map(|a| a.av(settings)),
-            outgoing: radiosity.map(|r| r.outgoing),
             irradiance: radiosity.map(|r| r.irradiance),
             reflections: self
                 .reflections
@@ -574,7 +573,7 @@ impl Renderer {
             let reflections =
                 st.reflections.get_or_insert_with(|| ReflectionsStage::new(device, s));
             let env = self.environment.as_ref().map(|e| e.size);
-            reflections.prepare(queue, s, scene, env, plan.runs(Effect::Radiosity));
+            reflections.prepare(queue, s, scene, plan.layers == 2, env);
         }
         st.composite.prepare(queue, scene);
         Ok(current)

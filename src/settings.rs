@@ -453,7 +453,9 @@ impl RadiositySettings {
 pub struct ReflectionSettings {
     /// Run the reflection pass where a material reflects.
     pub enabled: bool,
-    /// How far a reflection ray is marched, in scene units (48 steps).
+    /// How far a reflection ray is followed, in scene units; `f32::INFINITY` (the default):
+    /// until it leaves the screen. The march is hierarchical, so its cost follows the cells the
+    /// ray crosses, not this length.
     pub max_distance: f32,
     /// How far behind a surface a ray may pass and still hit it, in scene units.
     pub thickness: f32,
@@ -461,17 +463,17 @@ pub struct ReflectionSettings {
 
 impl Default for ReflectionSettings {
     fn default() -> Self {
-        ReflectionSettings { enabled: true, max_distance: 3.0, thickness: 0.1 }
+        ReflectionSettings { enabled: true, max_distance: f32::INFINITY, thickness: 0.1 }
     }
 }
 
 impl ReflectionSettings {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
-        if !(self.max_distance.is_finite() && self.max_distance > 0.0) {
+        if self.max_distance.is_nan() || self.max_distance <= 0.0 {
             return Err(Error::setting(
                 "reflections.max_distance",
-                format!("{} (must be finite and > 0)", self.max_distance),
+                format!("{} (must be > 0; infinite: to the screen's edge)", self.max_distance),
             ));
         }
         if !(self.thickness.is_finite() && self.thickness > 0.0) {

@@ -59,3 +59,34 @@ fn pyramid_of_stored_gbuffers_matches_cpu_reference() {
         }
     }
 }
+
+/// Each texel of the nearest-depth pyramid (the reflections' march) is the nearest depth of the
+/// pixels it covers, `[x, x + 1) x [y, y + 1)` times `2^level`, empty (0) ones not counted, and 0
+/// only where all of them are empty: the bound that lets the march skip a cell.
+#[test]
+fn nearest_pyramid_bounds_every_pixel_it_covers() {
+    let (w, h) = (37u32, 23u32); // odd sizes: the last texels cover fewer pixels
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let hash = i.wrapping_mul(2654435761) >> 7;
+            // A fifth of the pixels empty, the rest at depths in [1, 2).
+            if hash % 5 == 0 { 0.0 } else { 1.0 + (hash % 1000) as f32 / 1000.0 }
+        })
+        .collect();
+    let layout = PyramidLayout::new(w, h);
+    let nearest = cpu::nearest(&depth, &layout);
+    for (l, level) in layout.levels.iter().enumerate() {
+        for ty in 0..level.height {
+            for tx in 0..level.width {
+                let covered = (ty << l..((ty + 1) << l).min(h))
+                    .flat_map(|y| (tx << l..((tx + 1) << l).min(w)).map(move |x| (x, y)))
+                    .map(|(x, y)| depth[(y * w + x) as usize])
+                    .filter(|&d| d > 0.0)
+                    .fold(f32::INFINITY, f32::min);
+                let texel = nearest[(level.offset + ty * level.width + tx) as usize];
+                let expected = if covered.is_finite() { covered } else { 0.0 };
+                assert_eq!(texel, expected, "level {l} texel ({tx}, {ty})");
+            }
+        }
+    }
+}

@@ -22,40 +22,38 @@ fn reflective_spheres_match_cpu_reference() {
     let r = render(&scene, &scene.camera_or_default(), s);
     assert!(r.renderer.passes().contains(&deep_gbuffer::PassId::Reflections));
     let g = gpu();
-    let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+    let [layer0, layer1] =
+        [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
     let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
     assert!(reflective > 50, "the view shows reflective spheres ({reflective})");
-    march_matches(&r.renderer, &r.frame, &layer0, &r.vis1, scene.ambient, "grid");
+    march_matches(&r.renderer, &r.frame, [&layer0, &layer1], scene.ambient, "grid");
 }
 
-/// The GPU march of `renderer`'s last frame against the CPU march on `layer0` and the layer-1
-/// visibility words `vis1`, with the radiosity pass's B as the radiance seen and the constant
-/// sky `sky`.
+/// The GPU march of `renderer`'s last frame against the CPU march on both layers, hit surfaces
+/// shaded with the frame's direct light, obscurance and gathered irradiance, and the constant
+/// ambient `ambient`.
 fn march_matches(
     renderer: &Renderer,
     frame: &deep_gbuffer::frame::FrameUniform,
-    layer0: &[deep_gbuffer::GSample],
-    vis1: &[u64],
-    sky: Vec3,
+    layers: [&[deep_gbuffer::GSample]; 2],
+    ambient: Vec3,
     what: &str,
 ) {
-    let [b0, b1] = renderer.radiosity_buffers().expect("the scene is lit").outgoing;
-    let [radiance0, radiance1] =
-        [b0, b1].map(|b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>());
-    let s = &renderer.settings().reflections;
-    let (w, h) = (frame.width, frame.height);
-    let uniform = ReflectionsUniform {
-        sky: sky.to_array(),
-        max_distance: s.max_distance,
-        thickness: s.thickness,
-        tiles_x: w.div_ceil(8),
-        tiles_y: h.div_ceil(8),
-        env_width: 0,
-        env_height: 0,
-        with_emission: 1,
-        _pad: [0; 2],
+    let g = gpu();
+    let rgb = |b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>();
+    let direct = [rgb(renderer.direct_buffer()), rgb(renderer.direct1_buffer())];
+    let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
+    let irradiance = read4(renderer, renderer.radiosity_buffers().unwrap().irradiance);
+    let shading = cpu::HitShading {
+        direct: [&direct[0], &direct[1]],
+        av: Some(&av),
+        irradiance: Some(&irradiance),
     };
-    let expected = cpu::reflections(frame, &uniform, layer0, vis1, [&radiance0, &radiance1], None);
+    let s = &renderer.settings().reflections;
+    let layout = deep_gbuffer::frame::PyramidLayout::new(frame.width, frame.height);
+    let size = (frame.width, frame.height);
+    let uniform = ReflectionsUniform::new(s, size, &layout, true, ambient.to_array(), None);
+    let expected = cpu::reflections(frame, &uniform, layers, &shading, None);
     let actual = read4(renderer, renderer.reflections_buffer().unwrap());
     let far = |a: &Vec4, e: &Vec4| (*a - *e).abs().max_element() > 1e-3 * e.max_element().max(1.0);
     let what = format!("{what}: the march against the CPU's");
@@ -65,11 +63,16 @@ fn march_matches(
     assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
 }
 
-/// A mirror floor (reflectivity 1, black) and a glowing red wall standing on it, seen from
-/// above at an angle: a floor pixel shows the wall's red exactly when its mirrored view ray meets
-/// the wall (worked out here in closed form), the sky otherwise.
-#[test]
-fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
+/// A mirror floor (reflectivity 1, black) and a glowing red wall standing on it at `wall_z`,
+/// seen by `camera`, with the default settings: a floor pixel shows the wall's red exactly
+/// when its mirrored view ray meets the wall (worked out here in closed form) where the screen
+/// shows the wall, the sky when the ray misses the wall.
+fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
+    camera: Camera,
+    wall_z: f32,
+    half_width: f32,
+    height: f32,
+) {
     let mut scene = Scene::default();
     scene.materials.push(Material {
         name: "mirror".into(),
@@ -86,17 +89,18 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
         double_sided: true,
         ..Default::default()
     });
+    let side = 4.0 * half_width.max(-wall_z);
     let floor = [
-        Vec3::new(-4.0, 0.0, -4.0),
-        Vec3::new(4.0, 0.0, -4.0),
-        Vec3::new(4.0, 0.0, 4.0),
-        Vec3::new(-4.0, 0.0, 4.0),
+        Vec3::new(-side, 0.0, -side),
+        Vec3::new(side, 0.0, -side),
+        Vec3::new(side, 0.0, side),
+        Vec3::new(-side, 0.0, side),
     ];
     let wall = [
-        Vec3::new(-1.0, 0.0, -1.0),
-        Vec3::new(1.0, 0.0, -1.0),
-        Vec3::new(1.0, 1.0, -1.0),
-        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-half_width, 0.0, wall_z),
+        Vec3::new(half_width, 0.0, wall_z),
+        Vec3::new(half_width, height, wall_z),
+        Vec3::new(-half_width, height, wall_z),
     ];
     for (quad, material) in [(floor, 0), (wall, 1)] {
         scene
@@ -110,24 +114,14 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
             .unwrap();
     }
     scene.ambient = Vec3::new(0.0, 0.0, 0.5);
-    let camera =
-        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
     let (w, h) = (64u32, 48u32);
-    let settings = Settings {
-        timings: false,
-        reflections: deep_gbuffer::ReflectionSettings {
-            max_distance: 8.0,
-            thickness: 0.3,
-            ..Default::default()
-        },
-        ..Settings::with_size(w, h)
-    };
-    let r = render(&scene, &camera, settings);
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(w, h) });
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
     let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
     let inv_view = camera.view().inverse();
-    let (mut agree, mut checked) = (0, 0);
+    let view_proj = camera.projection(w as f32 / h as f32) * camera.view();
+    let (mut agree, mut checked, mut hits) = (0, 0, 0);
     for y in 0..h {
         for x in 0..w {
             let p = (y * w + x) as usize;
@@ -144,21 +138,25 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
             let point = inv_view.transform_point3(vp);
             let d = (point - camera.eye).normalize();
             let m = Vec3::new(d.x, -d.y, d.z);
-            let t = (-1.0 - point.z) / m.z;
-            let expected_hit = if t > 0.0 {
-                let q = point + m * t;
-                // Hit the wall, away from its border by a margin for the march's step and fade.
-                q.x.abs() < 0.8 && q.y > 0.15 && q.y < 0.85 && t < 7.0
-            } else {
-                false
-            };
-            let clear_miss = t <= 0.0 || {
-                let q = point + m * t;
-                q.x.abs() > 1.3 || q.y > 1.3
-            };
+            let t = (wall_z - point.z) / m.z;
+            let q = point + m * t;
+            // Where the screen shows q, in [0, 1]^2 (the march sees only what is on screen).
+            let c = view_proj * q.extend(1.0);
+            let uv = glam::Vec2::new(c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
+            // Hit the wall, away from its border by a margin for pixel steps, where the screen
+            // shows it clear of the edge fade.
+            let expected_hit = t > 0.0
+                && q.x.abs() < 0.8 * half_width
+                && q.y > 0.15 * height
+                && q.y < 0.85 * height
+                && c.w > 0.0
+                && uv.min_element() > 0.15
+                && uv.max_element() < 0.85;
+            let clear_miss = t <= 0.0 || q.x.abs() > 1.3 * half_width || q.y > 1.3 * height;
             let red = refl[p].x > 0.5 && refl[p].z < 0.2;
             // The sky is blue; a black pixel would be the mirror hitting itself.
             let sky = refl[p].x < 0.1 && refl[p].z > 0.4;
+            hits += usize::from(expected_hit && red);
             if expected_hit || clear_miss {
                 checked += 1;
                 if (expected_hit && red) || (clear_miss && sky) {
@@ -168,10 +166,83 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it() {
         }
     }
     assert!(checked > 200, "enough mirror pixels to judge ({checked})");
+    assert!(hits > 50, "wall at z = {wall_z}: enough rays meet it on screen ({hits})");
     assert!(
         agree as f64 >= 0.97 * checked as f64,
-        "{agree} of {checked} mirror pixels show what the geometry puts there"
+        "wall at z = {wall_z}: {agree} of {checked} mirror pixels show what the geometry puts there"
     );
+}
+
+#[test]
+fn a_mirror_shows_a_near_wall_where_mirrored_rays_meet_it() {
+    let camera =
+        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
+    a_mirror_shows_the_wall_where_mirrored_rays_meet_it(camera, -1.0, 1.0, 1.0);
+}
+
+/// The hierarchical march follows a ray across the screen, however far it goes in the scene.
+#[test]
+fn a_mirror_shows_a_far_wall_where_mirrored_rays_meet_it() {
+    let camera =
+        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.8, -10.0), 50.0, 0.1);
+    a_mirror_shows_the_wall_where_mirrored_rays_meet_it(camera, -30.0, 20.0, 3.0);
+}
+
+/// A convex mirror cannot see itself: every ray it reflects leaves it, so the march must find
+/// neither its own front (layer 0) nor the back it hides (layer 1), and each pixel shows the sky.
+#[test]
+fn a_convex_mirror_never_sees_itself() {
+    let (rings, segments) = (24u32, 48u32);
+    let mut positions = Vec::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..=segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            positions.push(Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ));
+        }
+    }
+    let mut indices = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            let a = i * (segments + 1) + j;
+            let b = a + segments + 1;
+            indices.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    let mut scene = Scene::default();
+    scene.materials.push(Material {
+        name: "chrome".into(),
+        base_color: Vec4::new(0.5, 0.5, 0.5, 1.0),
+        reflectivity: 1.0,
+        roughness: 0.0,
+        emissive: Vec3::splat(0.5),
+        ..Default::default()
+    });
+    // Smooth normals: a sphere's are its positions.
+    let mesh = MeshData {
+        positions: &positions,
+        normals: &positions,
+        uvs: &[],
+        indices: &indices,
+        material: 0,
+    };
+    scene.push_mesh(mesh).unwrap();
+    scene.ambient = Vec3::new(0.0, 0.0, 0.5);
+    let camera = Camera::perspective(Vec3::new(0.4, 0.8, 3.0), Vec3::ZERO, 45.0, 0.1);
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(64, 48) });
+    assert_eq!(r.renderer.last_plan().unwrap().layers, 2, "layer 1 holds the sphere's back");
+    let g = gpu();
+    let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+    let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
+    let shown: Vec<_> = refl.iter().zip(&layer0).filter(|(_, s)| s.depth > 0.0).collect();
+    assert!(shown.len() > 400, "the sphere fills the view ({})", shown.len());
+    let seen_itself = shown.iter().filter(|(v, _)| v.w > 0.0).count();
+    assert_eq!(seen_itself, 0, "of {} mirror pixels, {seen_itself} see the sphere", shown.len());
+    assert!(shown.iter().all(|(v, _)| (v.truncate() - scene.ambient).abs().max_element() < 1e-6));
 }
 
 #[test]
@@ -309,23 +380,36 @@ fn missed_rays_see_the_environment_map() {
 fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
     let f = shade_fixture(1, Settings { timings: false, ..Settings::default() });
     assert_eq!(GBUFFER_FIXTURES[1].1, "builtin:grid-20000");
-    let vis1: Vec<u64> = f.layers[1]
-        .samples
-        .iter()
-        .map(|s| {
-            if s.depth > 0.0 {
-                deep_gbuffer::gbuffer::vis_pack(s.depth, 0)
-            } else {
-                deep_gbuffer::gbuffer::VIS_EMPTY
-            }
-        })
-        .collect();
     march_matches(
         &f.renderer,
         &f.frame,
-        &f.layers[0].samples,
-        &vis1,
+        [&f.layers[0].samples, &f.layers[1].samples],
         f.scene.ambient,
         GBUFFER_FIXTURES[1].0,
     );
+}
+
+/// The ray's length and the shell's thickness: a bad value is a typed error naming the setting;
+/// an infinite length (the default) follows rays to the screen's edge.
+#[test]
+fn invalid_reflection_settings_are_refused() {
+    let g = gpu();
+    let with = |reflections| Settings { reflections, ..Settings::with_size(8, 8) };
+    for (max_distance, thickness, name) in [
+        (0.0, 0.1, "reflections.max_distance"),
+        (-1.0, 0.1, "reflections.max_distance"),
+        (f32::NAN, 0.1, "reflections.max_distance"),
+        (f32::INFINITY, 0.0, "reflections.thickness"),
+        (f32::INFINITY, f32::INFINITY, "reflections.thickness"),
+    ] {
+        let s = deep_gbuffer::ReflectionSettings { max_distance, thickness, enabled: true };
+        match Renderer::new(&g.device, &g.queue, with(s)) {
+            Err(Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("{name} = {max_distance}, {thickness} accepted"),
+        }
+    }
+    let unbounded = deep_gbuffer::ReflectionSettings::default();
+    assert_eq!(unbounded.max_distance, f32::INFINITY);
+    assert!(Renderer::new(&g.device, &g.queue, with(unbounded)).is_ok());
 }

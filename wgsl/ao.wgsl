@@ -88,11 +88,7 @@ fn texel_origin(level: u32, t: vec2<u32>) -> vec2<u32> {
 }
 
 fn normal_at(p: u32) -> vec3<f32> {
-#if PACKED
-    return gbuffer_decode(gbuffer[p * G_WORDS], gbuffer[p * G_WORDS + 1u]).normal;
-#else
-    return gbuffer[p * G_WORDS].yzw;
-#endif
+    return gword_normal(gbuffer[p * G_WORDS]);
 }
 
 fn obscurance(c: vec3<f32>, n: vec3<f32>, y: vec3<f32>) -> f32 {

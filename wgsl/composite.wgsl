@@ -1,17 +1,15 @@
 // Composite: DIRECT + AV * AMBIENT + RADIOSITY + emission into an HDR image (rgb, a = 1 on
-// surfaces). The diffuse albedo (1 - metallic) * base colour / pi reflects the irradiance
-//     E + (1 - conf) * AV * pi * ambient,
-// where E is the irradiance the radiosity gather found and conf the share of the hemisphere it
-// covers (both 0 without RADIOSITY, which leaves AV * ambient * albedo): the ambient term fills
-// the rest. AV is 1 without obscurance (AO undefined). Pixels
-// without a surface show the sky. With REFLECTIONS the reflected radiance (already scaled by the
-// reflectivity) is added.
+// surfaces), as wgsl/shared/shade.wgsl shades a surface: AV is 1 without obscurance (AO
+// undefined), the gather's irradiance and coverage 0 without RADIOSITY (which leaves
+// AV * ambient * albedo). Pixels without a surface show the sky. With REFLECTIONS the reflected
+// radiance (already scaled by the reflectivity) is added.
 // src/cpu/composite.rs is the same on the CPU.
 // defines: PACKED AO RADIOSITY REFLECTIONS
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/gbuffer_read.wgsl"
+#include "shared/shade.wgsl"
 
 // Mirrors `CompositeUniform` in src/frame/uniforms.rs.
 struct Composite {
@@ -50,17 +48,13 @@ fn composite_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #if AO
     visibility = av[p];
 #endif
-    var e = vec3<f32>(0.0);
-    var confidence = 0.0;
+    var irradiance = vec4<f32>(0.0);
 #if RADIOSITY
-    e = radiosity[p].rgb;
-    confidence = clamp(radiosity[p].a, 0.0, 1.0);
+    irradiance = radiosity[p];
 #endif
-    let albedo = (1.0 - s.metallic) * s.base_color;
-    let reflected = albedo * (e / 3.14159265 + (1.0 - confidence) * visibility * composite.ambient);
     var mirrored = vec3<f32>(0.0);
 #if REFLECTIONS
     mirrored = reflections[p].rgb;
 #endif
-    hdr[p] = vec4<f32>(direct[p].rgb + reflected + mirrored + s.emissive, 1.0);
+    hdr[p] = vec4<f32>(shaded(s, direct[p].rgb, visibility, irradiance, composite.ambient) + mirrored, 1.0);
 }

@@ -1,7 +1,11 @@
-// Depth pyramid: camera-space (view) depth MIP chain of one G-buffer layer, as in Scalable
-// Ambient Obscurance. Level 0 copies the G-buffer's view depth; level l + 1 takes one texel of
-// each 2x2 block of level l in a rotated-grid pattern, so every level holds real depths (no
-// averages across edges) and the choice varies from block to block. 0 marks "no surface".
+// Depth pyramids: camera-space (view) depth MIP chains of one G-buffer layer. Level 0 copies the
+// G-buffer's view depth (pyramid_base). 0 marks "no surface".
+// - pyramid_level, as in Scalable Ambient Obscurance: level l + 1 takes one texel of each 2x2
+//   block of level l in a rotated-grid pattern, so every level holds real depths (no averages
+//   across edges) and the choice varies from block to block. The obscurance reads it.
+// - pyramid_nearest: level l + 1 holds the nearest depth of its 2x2 block (0 only where all four
+//   are empty), so texel (x, y) of level l bounds every pixel in [x, x + 1) x [y, y + 1) times
+//   2^l from the front. The reflections' hierarchical march reads it.
 // All levels are packed into one f32 buffer at offsets from `PyramidLayout` (src/frame/pyramid.rs).
 // src/cpu/pyramid.rs is the same on the CPU.
 // defines: PACKED
@@ -41,4 +45,28 @@ fn pyramid_level(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sx = min(2u * gid.x + ((gid.y & 1u) ^ 1u), level.src_width - 1u);
     let sy = min(2u * gid.y + ((gid.x & 1u) ^ 1u), level.src_height - 1u);
     pyramid[level.dst_offset + gid.y * level.dst_width + gid.x] = pyramid[level.src_offset + sy * level.src_width + sx];
+}
+
+// The nearer of two depths, 0 (no surface) counting as infinitely far.
+fn nearer(a: f32, b: f32) -> f32 {
+    if a > 0.0 && (b <= 0.0 || a < b) {
+        return a;
+    }
+    return b;
+}
+
+@compute @workgroup_size(8, 8)
+fn pyramid_nearest(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= level.dst_width || gid.y >= level.dst_height {
+        return;
+    }
+    let x0 = 2u * gid.x;
+    let y0 = 2u * gid.y;
+    let x1 = min(x0 + 1u, level.src_width - 1u);
+    let y1 = min(y0 + 1u, level.src_height - 1u);
+    let row0 = level.src_offset + y0 * level.src_width;
+    let row1 = level.src_offset + y1 * level.src_width;
+    let top = nearer(pyramid[row0 + x0], pyramid[row0 + x1]);
+    let bottom = nearer(pyramid[row1 + x0], pyramid[row1 + x1]);
+    pyramid[level.dst_offset + gid.y * level.dst_width + gid.x] = nearer(top, bottom);
 }

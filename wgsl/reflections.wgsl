@@ -4,29 +4,45 @@
 //   appended to the tile list (other tiles do no work).
 // reflections_args: indirect dispatch arguments from the list's length.
 // reflections_march: one 8x8 workgroup per listed tile. For a reflective pixel the mirror
-//   direction of the view ray is marched in view space in at most STEPS equal steps up to
-//   `max_distance`; a step hits where the ray is behind a layer's surface by no more than
-//   `thickness` (layer 0 first, its depth taken on the plane of the pixel's point and normal at
-//   the step's exact sub-pixel position; then layer 1, at the pixel's depth), and returns that pixel's outgoing radiance: the
-//   radiosity pass's B (direct + emission + the previous frame's indirect light) when it runs,
-//   else direct + emission (layer 0) or direct (layer 1). A ray that leaves the screen or the
-//   distance sees the environment: the equirectangular map (src/environment.rs gives the
-//   mapping) when one is set, else the constant sky. Hits fade out near the screen edges; the
-//   confidence (alpha) is 1 for a hit far from the edges, 0 for the environment. Output:
-//   reflectivity * colour.
+//   direction of the view ray is followed across the screen, from the pixel to where it leaves
+//   the screen, passes the near plane or reaches `max_distance`, through the nearest-depth
+//   pyramid of layer 0 (wgsl/pyramid.wgsl, pyramid_nearest): the ray's depth, exact along the
+//   screen-space segment (1/z is linear in screen space; z itself for an orthographic camera),
+//   is compared with a cell's nearest depth; a cell the ray crosses wholly in front of is
+//   skipped and the next one is a level coarser, else the march descends. Layer 1 lies behind
+//   layer 0, so the same bound skips it. In a pixel (level 0) the ray hits a layer where its
+//   segment across the pixel meets the layer's shell, between the surface and `thickness`
+//   behind it, from its front (layer 0 first, its depth taken on the plane of the pixel's point
+//   and normal, so a ray leaving a plane never hits the plane's own neighbouring pixels; then
+//   layer 1 when the frame drew it, at the pixel's depth). A hit sees the surface as the image
+//   shows it, reflections left out (wgsl/shared/shade.wgsl: direct light, emission, and the
+//   diffuse albedo times the gathered irradiance and the ambient term dimmed by the
+//   obscurance). A ray that leaves the screen, the distance or the iteration budget sees the
+//   environment: the equirectangular map (src/environment.rs gives the mapping) when one is
+//   set, else the constant sky. Hits fade out near the screen edges; the confidence (alpha) is
+//   1 for a hit far from the edges, 0 for the environment. Output: reflectivity * colour.
 // src/cpu/reflections.rs is the same on the CPU.
-// defines: PACKED
+// defines: PACKED AO RADIOSITY
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/gbuffer_read.wgsl"
+#include "shared/shade.wgsl"
 
-const STEPS: u32 = 48u;
+// Most cells one ray visits (each a pyramid read, or at level 0 a pixel's test).
+const ITERATIONS: u32 = 64u;
 const EDGE_FADE: f32 = 0.1;
+// A ray of unbounded length is followed this many times the depth of its origin: its end
+// projects within a thousandth of the screen's half-width of the vanishing point.
+const UNBOUNDED: f32 = 1000.0;
+// The ray stops this much in front of the near plane (relative).
+const NEAR_MARGIN: f32 = 1.001;
 
 // Mirrors `ReflectionsUniform` in src/frame/uniforms.rs.
 struct Reflections {
-    sky: vec3<f32>,
+    // The scene's ambient radiance: what a missed ray sees without an environment map, and the
+    // ambient term of the surfaces rays hit (shade.wgsl).
+    ambient: vec3<f32>,
     max_distance: f32,
     thickness: f32,
     tiles_x: u32,
@@ -34,23 +50,33 @@ struct Reflections {
     // Environment map size (0: the constant sky).
     env_width: u32,
     env_height: u32,
-    // 1: radiance0 already holds emission (the radiosity pass's B).
-    with_emission: u32,
+    // Levels of the nearest-depth pyramid, their offsets and widths.
+    levels: u32,
+    // 1: the frame drew layer 1.
+    two_layers: u32,
     _pad0: u32,
-    _pad1: u32,
+    offsets: array<vec4<u32>, 2>,
+    widths: array<vec4<u32>, 2>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: Reflections;
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
-@group(0) @binding(3) var<storage, read> gbuffer1_depth: array<u32>;
-@group(0) @binding(4) var<storage, read> radiance0: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> radiance1: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
+@group(0) @binding(4) var<storage, read> direct0: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> direct1: array<vec4<f32>>;
 // [0]: listed tiles; then the tile indices.
 @group(0) @binding(6) var<storage, read_write> tiles: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 @group(0) @binding(8) var<storage, read_write> reflections: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read> environment_map: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> nearest: array<f32>;
+#if AO
+@group(0) @binding(11) var<storage, read> av: array<f32>;
+#endif
+#if RADIOSITY
+@group(0) @binding(12) var<storage, read> irradiance: array<vec4<f32>>;
+#endif
 
 const TAU_R: f32 = 6.28318531;
 const PI_R: f32 = 3.14159265;
@@ -62,7 +88,7 @@ fn env_texel(x: i32, y: i32) -> vec3<f32> {
 // The environment's radiance along world-space unit direction d (bilinear, u wraps).
 fn environment(d: vec3<f32>) -> vec3<f32> {
     if params.env_width == 0u {
-        return params.sky;
+        return params.ambient;
     }
     let w = i32(params.env_width);
     let h = i32(params.env_height);
@@ -110,30 +136,28 @@ fn reflections_args() {
     args[2] = 1u;
 }
 
-// The pixel (x, y) and view depth of view-space point q, or x < 0 when it is off screen.
-fn project(q: vec3<f32>) -> vec3<f32> {
+// The screen position (pixels) of view-space point q; q lies in front of the camera.
+fn project(q: vec3<f32>) -> vec2<f32> {
     let c = mat_mul(frame.proj, vec4<f32>(q, 1.0));
-    if !(c.w > 0.0) {
-        return vec3<f32>(-1.0);
-    }
-    let px = vec2<f32>((c.x / c.w * 0.5 + 0.5) * f32(frame.width), (0.5 - c.y / c.w * 0.5) * f32(frame.height));
-    if !(px.x >= 0.0 && px.y >= 0.0 && px.x < f32(frame.width) && px.y < f32(frame.height)) {
-        return vec3<f32>(-1.0);
-    }
-    return vec3<f32>(px, -q.z);
+    return vec2<f32>((c.x / c.w * 0.5 + 0.5) * f32(frame.width), (0.5 - c.y / c.w * 0.5) * f32(frame.height));
 }
 
-// The view depth of pixel q's layer-0 surface where the view ray through the sub-pixel position
-// xy meets it: the plane of the pixel's point and normal, not the depth at the pixel centre, so
-// a ray leaving a plane never hits the plane's own neighbouring pixels. Depth 0: no surface.
-fn surface_depth(q: u32, xy: vec2<f32>) -> f32 {
-    let s = sample_at(q);
-    if !(s.depth > 0.0) {
-        return 0.0;
-    }
+// What varies linearly along a screen-space segment: 1/z of view depth z (z itself for an
+// orthographic camera), and back.
+fn linear_of(z: f32) -> f32 {
+    return select(1.0 / z, z, frame.ortho != 0u);
+}
+
+fn depth_of(k: f32) -> f32 {
+    return select(1.0 / k, k, frame.ortho != 0u);
+}
+
+// The view depth of the plane of pixel q's layer-0 sample s (its point and normal n, in view
+// space) where the view ray through the sub-pixel position xy meets it, not the depth at the
+// pixel centre, so a ray leaving a plane never hits the plane's own neighbouring pixels.
+fn plane_depth(s: GSample, n: vec3<f32>, q: u32, xy: vec2<f32>) -> f32 {
     let centre = vec2<f32>(f32(q % frame.width), f32(q / frame.width)) + 0.5;
     let c = view_position(frame, centre, s.depth);
-    let n = mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz;
     // The ray through xy is a + t b, t its view depth.
     let a = view_position(frame, xy, 0.0);
     let b = view_position(frame, xy, 1.0) - a;
@@ -144,53 +168,144 @@ fn surface_depth(q: u32, xy: vec2<f32>) -> f32 {
     return dot(n, c - a) / facing;
 }
 
+// The segment parameter where a ray from `a` along `d` (pixels per unit) leaves the cell
+// `cell` of `size` pixels.
+fn cell_exit(a: vec2<f32>, d: vec2<f32>, cell: vec2<u32>, size: f32) -> f32 {
+    let far_side = (vec2<f32>(cell) + select(vec2<f32>(0.0), vec2<f32>(1.0), d > vec2<f32>(0.0))) * size;
+    let t = (far_side - a) / d;
+    return min(select(3.4e38, t.x, d.x != 0.0), select(3.4e38, t.y, d.y != 0.0));
+}
+
+// The segment parameter where a ray from `a` along `d` leaves the screen (at most 1).
+fn screen_exit(a: vec2<f32>, d: vec2<f32>) -> f32 {
+    let size = vec2<f32>(f32(frame.width), f32(frame.height));
+    let t = (select(vec2<f32>(0.0), size, d > vec2<f32>(0.0)) - a) / d;
+    return min(1.0, min(select(1.0, t.x, d.x != 0.0), select(1.0, t.y, d.y != 0.0)));
+}
+
+fn nearest_at(level: u32, cell: vec2<u32>) -> f32 {
+    let offset = params.offsets[level / 4u][level % 4u];
+    return nearest[offset + cell.y * params.widths[level / 4u][level % 4u] + cell.x];
+}
+
+// The layer (0 or 1) pixel q shows where the ray r's segment across it, from xy_in at depth
+// z_in to xy_out at depth z_out, meets it from the front (a surface whose normal faces along
+// the ray is one the ray would reach from inside its solid); 2: neither.
+fn layer_hit(q: u32, r: vec3<f32>, xy_in: vec2<f32>, z_in: f32, xy_out: vec2<f32>, z_out: f32) -> u32 {
+    let s = sample_at(q);
+    if s.depth > 0.0 {
+        let n = mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz;
+        let g_in = z_in - plane_depth(s, n, q, xy_in);
+        let g_out = z_out - plane_depth(s, n, q, xy_out);
+        if max(g_in, g_out) >= 0.0 && min(g_in, g_out) <= params.thickness && dot(n, r) < 0.0 {
+            return 0u;
+        }
+    }
+    if params.two_layers == 0u {
+        return 2u;
+    }
+    let w1 = gbuffer1[q * G_WORDS];
+    let d1 = gword_depth(w1);
+    let n1 = mat_mul(frame.view, vec4<f32>(gword_normal(w1), 0.0)).xyz;
+    if d1 > 0.0 && max(z_in, z_out) >= d1 && min(z_in, z_out) - d1 <= params.thickness && dot(n1, r) < 0.0 {
+        return 1u;
+    }
+    return 2u;
+}
+
+// What a ray that hits `layer` at pixel q sees: the surface as the image shows it
+// (shade.wgsl). Layer 1 has no gathered irradiance or obscurance of its own: the ambient term
+// reaches it through the obscurance of layer 0 at the same pixel, its nearest neighbourhood.
+fn seen_at(q: u32, layer: u32) -> vec3<f32> {
+    var visibility = 1.0;
+#if AO
+    visibility = av[q];
+#endif
+    if layer == 1u {
+        let w = gbuffer1[q * G_WORDS];
+#if PACKED
+        let s1 = gbuffer_decode(w, gbuffer1[q * G_WORDS + 1u]);
+#else
+        let s1 = gbuffer_decode(w, gbuffer1[q * G_WORDS + 1u], gbuffer1[q * G_WORDS + 2u], gbuffer1[q * G_WORDS + 3u]);
+#endif
+        return shaded(s1, direct1[q].rgb, visibility, vec4<f32>(0.0), params.ambient);
+    }
+    var e = vec4<f32>(0.0);
+#if RADIOSITY
+    e = irradiance[q];
+#endif
+    return shaded(sample_at(q), direct0[q].rgb, visibility, e, params.ambient);
+}
+
 fn trace(pixel: vec2<u32>) -> vec4<f32> {
     let s = sample_at(pixel.y * frame.width + pixel.x);
     if !(s.depth > 0.0) || !(s.reflectivity > 0.0) {
         return vec4<f32>(0.0);
     }
-    let p = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
+    let a = vec2<f32>(pixel) + 0.5;
+    let p = view_position(frame, a, s.depth);
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
     var v = normalize(p);
     if frame.ortho != 0u {
         v = vec3<f32>(0.0, 0.0, -1.0);
     }
     let r = reflect(v, n);
-    let step = params.max_distance / f32(STEPS);
     let sky = environment(normalize(mat_mul(frame.inv_view, vec4<f32>(r, 0.0)).xyz));
+    // The ray's length: the distance, the unbounded stand-in, and the near plane.
+    var reach_3d = min(params.max_distance, UNBOUNDED * s.depth);
+    if r.z > 0.0 {
+        reach_3d = min(reach_3d, (-frame.near * NEAR_MARGIN - p.z) / r.z);
+    }
+    if !(reach_3d > 0.0) {
+        return vec4<f32>(s.reflectivity * sky, 0.0);
+    }
+    // The segment on screen from a (parameter 0) to the ray's end (1), and its depth.
+    let e = p + r * reach_3d;
+    let d = project(e) - a;
+    let k0 = linear_of(s.depth);
+    let k1 = linear_of(-e.z);
+    let t_end = screen_exit(a, d);
+    let reach = max(abs(d.x), abs(d.y));
+    if !(reach > 0.5) {
+        return vec4<f32>(s.reflectivity * sky, 0.0);
+    }
+    // A thousandth of a pixel along the segment: past a cell's border into the next.
+    let nudge = 1e-3 / reach;
+    let top = params.levels - 1u;
+    let inside = vec2<f32>(f32(frame.width), f32(frame.height)) - 1e-3;
+    var level = 0u;
+    var t = cell_exit(a, d, pixel, 1.0) + nudge;
     var colour = sky;
     var confidence = 0.0;
-    for (var i = 1u; i <= STEPS; i++) {
-        let hit = project(p + r * (step * f32(i)));
-        if hit.x < 0.0 {
-            break;
-        }
-        let q = u32(hit.y) * frame.width + u32(hit.x);
-        let d0 = surface_depth(q, hit.xy);
-        var layer = 2u;
-        if d0 > 0.0 && hit.z >= d0 && hit.z - d0 <= params.thickness {
-            layer = 0u;
-        } else {
-            let w1 = gbuffer1_depth[2u * q + 1u];
-            let d1 = bitcast<f32>(w1);
-            if w1 != 0xffffffffu && hit.z >= d1 && hit.z - d1 <= params.thickness {
-                layer = 1u;
+    for (var i = 0u; i < ITERATIONS && t < t_end; i++) {
+        let xy = clamp(a + d * t, vec2<f32>(0.0), inside);
+        let size = f32(1u << level);
+        let cell = vec2<u32>(xy / size);
+        let t_out = min(cell_exit(a, d, cell, size), t_end);
+        let z_in = depth_of(mix(k0, k1, t));
+        let z_out = depth_of(mix(k0, k1, t_out));
+        if level > 0u {
+            let front = nearest_at(level, cell);
+            if front > 0.0 && max(z_in, z_out) >= front {
+                level -= 1u;
+            } else {
+                t = t_out + nudge;
+                level = min(level + 1u, top);
             }
+            continue;
         }
+        let q = cell.y * frame.width + cell.x;
+        let layer = layer_hit(q, r, xy, z_in, a + d * t_out, z_out);
         if layer < 2u {
-            var seen = radiance0[q].rgb;
-            if params.with_emission == 0u {
-                seen += sample_at(q).emissive;
-            }
-            if layer == 1u {
-                seen = radiance1[q].rgb;
-            }
-            let uv = hit.xy / vec2<f32>(f32(frame.width), f32(frame.height));
+            let seen = seen_at(q, layer);
+            let uv = xy / vec2<f32>(f32(frame.width), f32(frame.height));
             let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
             confidence = clamp(edge / EDGE_FADE, 0.0, 1.0);
             colour = mix(sky, seen, confidence);
             break;
         }
+        t = t_out + nudge;
+        level = min(1u, top);
     }
     return vec4<f32>(s.reflectivity * colour, confidence);
 }

@@ -1,8 +1,21 @@
-//! CPU reference of `wgsl/composite.wgsl`.
+//! CPU reference of `wgsl/composite.wgsl` and of the shading it shares with the reflections
+//! (`wgsl/shared/shade.wgsl`).
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::gbuffer::GSample;
+
+/// As `shaded`: the radiance the image shows at surface `s`, reflections left out: `direct`,
+/// the emission, and the diffuse albedo times `E / pi + (1 - conf) AV ambient`, where
+/// `irradiance` holds the gather's irradiance E (rgb) and coverage conf (w).
+pub fn shaded(s: &GSample, direct: Vec3, visibility: f32, irradiance: Vec4, ambient: Vec3) -> Vec3 {
+    let confidence = irradiance.w.clamp(0.0, 1.0);
+    let albedo = (1.0 - s.metallic) * s.base_color;
+    let reflected = albedo
+        * (irradiance.truncate() / std::f32::consts::PI
+            + (1.0 - confidence) * visibility * ambient);
+    direct + reflected + s.emissive
+}
 
 /// DIRECT + AV * AMBIENT + RADIOSITY + emission per pixel; the sky where there is no surface.
 /// `radiosity` is the irradiance the gather found (rgb) and the share of the hemisphere it
@@ -11,7 +24,7 @@ pub fn composite(
     layer: &[GSample],
     direct: &[Vec3],
     av: Option<&[f32]>,
-    radiosity: Option<&[glam::Vec4]>,
+    radiosity: Option<&[Vec4]>,
     ambient: Vec3,
 ) -> Vec<Vec3> {
     layer
@@ -22,12 +35,8 @@ pub fn composite(
                 return ambient;
             }
             let visibility = av.map_or(1.0, |a| a[p]);
-            let (e, confidence) =
-                radiosity.map_or((Vec3::ZERO, 0.0), |r| (r[p].truncate(), r[p].w.clamp(0.0, 1.0)));
-            let albedo = (1.0 - s.metallic) * s.base_color;
-            let reflected =
-                albedo * (e / std::f32::consts::PI + (1.0 - confidence) * visibility * ambient);
-            direct[p] + reflected + s.emissive
+            let irradiance = radiosity.map_or(Vec4::ZERO, |r| r[p]);
+            shaded(s, direct[p], visibility, irradiance, ambient)
         })
         .collect()
 }

@@ -1,40 +1,42 @@
-//! CPU reference of `wgsl/reflections.wgsl`: the two-layer screen-space march.
+//! CPU reference of `wgsl/reflections.wgsl`: the two-layer hierarchical screen-space march.
 
-use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
+use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
+use crate::cpu::composite::shaded;
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::pyramid::nearest;
 use crate::environment::Environment;
-use crate::frame::FrameUniform;
-use crate::frame::ReflectionsUniform;
-use crate::gbuffer::{GSample, VIS_EMPTY};
+use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform};
+use crate::gbuffer::GSample;
 
-const STEPS: u32 = 48;
+/// Most cells one ray visits.
+const ITERATIONS: u32 = 64;
 const EDGE_FADE: f32 = 0.1;
+/// An unbounded ray is followed this many times the depth of its origin.
+const UNBOUNDED: f32 = 1000.0;
+/// The ray stops this much in front of the near plane (relative).
+const NEAR_MARGIN: f32 = 1.001;
 
-fn project(f: &FrameUniform, q: Vec3) -> Option<(Vec2, f32)> {
+/// The screen position (pixels) of view-space point q in front of the camera.
+fn project(f: &FrameUniform, q: Vec3) -> Vec2 {
     let c = mat_mul(&f.proj, q.extend(1.0).to_array());
-    if c.w.is_nan() || c.w <= 0.0 {
-        return None;
-    }
-    let px = Vec2::new(
-        (c.x / c.w * 0.5 + 0.5) * f.width as f32,
-        (0.5 - c.y / c.w * 0.5) * f.height as f32,
-    );
-    if !(px.x >= 0.0 && px.y >= 0.0 && px.x < f.width as f32 && px.y < f.height as f32) {
-        return None;
-    }
-    Some((px, -q.z))
+    Vec2::new((c.x / c.w * 0.5 + 0.5) * f.width as f32, (0.5 - c.y / c.w * 0.5) * f.height as f32)
 }
 
-/// As `surface_depth`: pixel q's layer-0 plane depth along the view ray through `xy`.
-fn surface_depth(f: &FrameUniform, layer0: &[GSample], q: usize, xy: Vec2) -> f32 {
-    let s = &layer0[q];
-    if s.depth.is_nan() || s.depth <= 0.0 {
-        return 0.0;
-    }
+/// 1/z of view depth z (z for an orthographic camera): linear along a screen-space segment.
+fn linear_of(f: &FrameUniform, z: f32) -> f32 {
+    if f.ortho != 0 { z } else { 1.0 / z }
+}
+
+fn depth_of(f: &FrameUniform, k: f32) -> f32 {
+    if f.ortho != 0 { k } else { 1.0 / k }
+}
+
+/// As `plane_depth`: the depth of the plane of pixel q's sample s (view-space normal n) along
+/// the view ray through `xy`.
+fn plane_depth(f: &FrameUniform, s: &GSample, n: Vec3, q: usize, xy: Vec2) -> f32 {
     let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32) + 0.5;
     let c = view_position(f, centre, s.depth);
-    let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz();
     let a = view_position(f, xy, 0.0);
     let b = view_position(f, xy, 1.0) - a;
     let facing = n.dot(b);
@@ -44,16 +46,165 @@ fn surface_depth(f: &FrameUniform, layer0: &[GSample], q: usize, xy: Vec2) -> f3
     n.dot(c - a) / facing
 }
 
-/// Reflected radiance (rgb, scaled by reflectivity) and confidence (w) of every pixel.
-/// `environment` is the map the uniform's `env_width` refers to (`None`: the constant sky).
+fn view_normal(f: &FrameUniform, s: &GSample) -> Vec3 {
+    mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz()
+}
+
+/// Where a ray from `a` along `d` leaves cell `cell` of `size` pixels.
+fn cell_exit(a: Vec2, d: Vec2, cell: UVec2, size: f32) -> f32 {
+    let side = |c: u32, d: f32| (c as f32 + if d > 0.0 { 1.0 } else { 0.0 }) * size;
+    let tx = if d.x != 0.0 { (side(cell.x, d.x) - a.x) / d.x } else { 3.4e38 };
+    let ty = if d.y != 0.0 { (side(cell.y, d.y) - a.y) / d.y } else { 3.4e38 };
+    tx.min(ty)
+}
+
+/// Where a ray from `a` along `d` leaves the screen (at most 1).
+fn screen_exit(f: &FrameUniform, a: Vec2, d: Vec2) -> f32 {
+    let exit = |a: f32, d: f32, size: f32| {
+        if d != 0.0 { ((if d > 0.0 { size } else { 0.0 }) - a) / d } else { 1.0 }
+    };
+    1f32.min(exit(a.x, d.x, f.width as f32).min(exit(a.y, d.y, f.height as f32)))
+}
+
+/// The march's inputs that stay the same for every pixel.
+struct March<'a> {
+    f: &'a FrameUniform,
+    u: &'a ReflectionsUniform,
+    layer0: &'a [GSample],
+    layer1: Option<&'a [GSample]>,
+    nearest: Vec<f32>,
+    layout: PyramidLayout,
+}
+
+impl March<'_> {
+    /// As `layer_hit`: the layer pixel q shows where the ray r's segment across it meets it
+    /// from the front.
+    #[allow(clippy::too_many_arguments)]
+    fn layer_hit(
+        &self,
+        q: usize,
+        r: Vec3,
+        xy_in: Vec2,
+        z_in: f32,
+        xy_out: Vec2,
+        z_out: f32,
+    ) -> Option<u32> {
+        let (f, thickness) = (self.f, self.u.thickness);
+        let s = &self.layer0[q];
+        if s.depth > 0.0 {
+            let n = view_normal(f, s);
+            let g_in = z_in - plane_depth(f, s, n, q, xy_in);
+            let g_out = z_out - plane_depth(f, s, n, q, xy_out);
+            if g_in.max(g_out) >= 0.0 && g_in.min(g_out) <= thickness && n.dot(r) < 0.0 {
+                return Some(0);
+            }
+        }
+        let s1 = &self.layer1?[q];
+        let n1 = view_normal(f, s1);
+        (s1.depth > 0.0
+            && z_in.max(z_out) >= s1.depth
+            && z_in.min(z_out) - s1.depth <= thickness
+            && n1.dot(r) < 0.0)
+            .then_some(1)
+    }
+
+    /// As `trace`: the pixel where pixel (x, y)'s mirrored ray hits, its layer and the
+    /// screen position it entered; `None` for the environment.
+    fn trace(&self, pixel: UVec2, s: &GSample, r: Vec3) -> Option<(usize, u32, Vec2)> {
+        let f = self.f;
+        let a = pixel.as_vec2() + 0.5;
+        let p = view_position(f, a, s.depth);
+        let mut reach_3d = self.u.max_distance.min(UNBOUNDED * s.depth);
+        if r.z > 0.0 {
+            reach_3d = reach_3d.min((-f.near * NEAR_MARGIN - p.z) / r.z);
+        }
+        if reach_3d.is_nan() || reach_3d <= 0.0 {
+            return None;
+        }
+        let e = p + r * reach_3d;
+        let d = project(f, e) - a;
+        let (k0, k1) = (linear_of(f, s.depth), linear_of(f, -e.z));
+        let t_end = screen_exit(f, a, d);
+        let reach = d.x.abs().max(d.y.abs());
+        if reach.is_nan() || reach <= 0.5 {
+            return None;
+        }
+        let nudge = 1e-3 / reach;
+        let top = self.u.levels - 1;
+        let inside = Vec2::new(f.width as f32, f.height as f32) - 1e-3;
+        let mut level = 0u32;
+        let mut t = cell_exit(a, d, pixel, 1.0) + nudge;
+        let mut i = 0;
+        while i < ITERATIONS && t < t_end {
+            i += 1;
+            let xy = (a + d * t).clamp(Vec2::ZERO, inside);
+            let size = (1u32 << level) as f32;
+            let cell = (xy / size).as_uvec2();
+            let t_out = cell_exit(a, d, cell, size).min(t_end);
+            let z_in = depth_of(f, k0 + (k1 - k0) * t);
+            let z_out = depth_of(f, k0 + (k1 - k0) * t_out);
+            if level > 0 {
+                let l = self.layout.levels[level as usize];
+                let front = self.nearest[(l.offset + cell.y * l.width + cell.x) as usize];
+                if front > 0.0 && z_in.max(z_out) >= front {
+                    level -= 1;
+                } else {
+                    t = t_out + nudge;
+                    level = (level + 1).min(top);
+                }
+                continue;
+            }
+            let q = (cell.y * f.width + cell.x) as usize;
+            if let Some(layer) = self.layer_hit(q, r, xy, z_in, a + d * t_out, z_out) {
+                return Some((q, layer, xy));
+            }
+            t = t_out + nudge;
+            level = 1.min(top);
+        }
+        None
+    }
+}
+
+/// The frame's terms a hit surface is shaded with (`seen_at`).
+pub struct HitShading<'a> {
+    /// Direct radiance of each layer.
+    pub direct: [&'a [Vec3]; 2],
+    /// The ambient visibility, when obscurance runs.
+    pub av: Option<&'a [f32]>,
+    /// The gathered irradiance and coverage, when radiosity runs.
+    pub irradiance: Option<&'a [Vec4]>,
+}
+
+impl HitShading<'_> {
+    /// As `seen_at`: what a ray that hits `layer` at pixel q sees.
+    fn seen(&self, layers: [&[GSample]; 2], q: usize, layer: u32, ambient: Vec3) -> Vec3 {
+        let visibility = self.av.map_or(1.0, |a| a[q]);
+        if layer == 1 {
+            return shaded(&layers[1][q], self.direct[1][q], visibility, Vec4::ZERO, ambient);
+        }
+        let e = self.irradiance.map_or(Vec4::ZERO, |e| e[q]);
+        shaded(&layers[0][q], self.direct[0][q], visibility, e, ambient)
+    }
+}
+
+/// Reflected radiance (rgb, scaled by reflectivity) and confidence (w) of every pixel, marching
+/// layer 0 and, when the uniform's `two_layers` is set, layer 1, and shading what the rays hit
+/// with `shading`. `environment` is the map the uniform's `env_width` refers to (`None`: the
+/// constant ambient).
 pub fn reflections(
     f: &FrameUniform,
     u: &ReflectionsUniform,
-    layer0: &[GSample],
-    vis1: &[u64],
-    radiance: [&[Vec3]; 2],
+    layers: [&[GSample]; 2],
+    shading: &HitShading<'_>,
     environment: Option<&Environment>,
 ) -> Vec<Vec4> {
+    let [layer0, layer1] = layers;
+    let layout = PyramidLayout::new(f.width, f.height);
+    let depth: Vec<f32> =
+        layer0.iter().map(|s| if s.depth > 0.0 { s.depth } else { 0.0 }).collect();
+    let layer1 = (u.two_layers != 0).then_some(layer1);
+    let march = March { f, u, layer0, layer1, nearest: nearest(&depth, &layout), layout };
+    let ambient = Vec3::from(u.ambient);
     let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
@@ -70,39 +221,19 @@ pub fn reflections(
             let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
             let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
             let r = v - 2.0 * n.dot(v) * n;
-            let step = u.max_distance / STEPS as f32;
             let sky = match environment {
                 Some(env) if u.env_width != 0 => {
                     env.sample(mat_mul(&f.inv_view, r.extend(0.0).to_array()).xyz().normalize())
                 }
-                _ => Vec3::from(u.sky),
+                _ => ambient,
             };
             let (mut colour, mut confidence) = (sky, 0.0);
-            for i in 1..=STEPS {
-                let Some((px, z)) = project(f, p + r * (step * i as f32)) else { break };
-                let q = (px.y as u32 * f.width + px.x as u32) as usize;
-                let d0 = surface_depth(f, layer0, q, px);
-                let layer = if d0 > 0.0 && z >= d0 && z - d0 <= u.thickness {
-                    Some(0)
-                } else {
-                    let w1 = vis1[q];
-                    let d1 = f32::from_bits((w1 >> 32) as u32);
-                    (w1 != VIS_EMPTY && z >= d1 && z - d1 <= u.thickness).then_some(1)
-                };
-                if let Some(layer) = layer {
-                    let seen = if layer == 0 {
-                        let emission =
-                            if u.with_emission == 0 { layer0[q].emissive } else { Vec3::ZERO };
-                        radiance[0][q] + emission
-                    } else {
-                        radiance[1][q]
-                    };
-                    let uv = px / Vec2::new(f.width as f32, f.height as f32);
-                    let edge = uv.x.min(1.0 - uv.x).min(uv.y.min(1.0 - uv.y));
-                    confidence = (edge / EDGE_FADE).clamp(0.0, 1.0);
-                    colour = sky.lerp(seen, confidence);
-                    break;
-                }
+            if let Some((q, layer, xy)) = march.trace(UVec2::new(x, y), s, r) {
+                let seen = shading.seen(layers, q, layer, ambient);
+                let uv = xy / Vec2::new(f.width as f32, f.height as f32);
+                let edge = uv.x.min(1.0 - uv.x).min(uv.y.min(1.0 - uv.y));
+                confidence = (edge / EDGE_FADE).clamp(0.0, 1.0);
+                colour = sky.lerp(seen, confidence);
             }
             out[pi] = (s.reflectivity * colour).extend(confidence);
         }

@@ -4,7 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::{PyramidLayout, mirrored};
-use crate::settings::{AoSettings, Normalization, RadiosityEstimator, RadiositySettings};
+use crate::settings::{
+    AoSettings, Normalization, RadiosityEstimator, RadiositySettings, ReflectionSettings,
+};
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
 #[repr(C)]
@@ -153,9 +155,10 @@ impl RadiosityUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct ReflectionsUniform {
-    /// Environment (sky) radiance a missed ray sees.
-    pub sky: [f32; 3],
-    /// How far a ray is marched, in scene units.
+    /// The scene's ambient radiance: what a missed ray sees without an environment map, and the
+    /// ambient term of the surfaces rays hit.
+    pub ambient: [f32; 3],
+    /// How far a ray is followed, in scene units (infinite: to the screen's edge).
     pub max_distance: f32,
     /// How far behind a surface a ray may pass and still hit it, in scene units.
     pub thickness: f32,
@@ -167,18 +170,73 @@ pub struct ReflectionsUniform {
     pub env_width: u32,
     /// Environment map height in texels.
     pub env_height: u32,
-    /// 1: the layer-0 radiance already includes emission (the radiosity pass's B).
-    pub with_emission: u32,
+    /// Levels of the nearest-depth pyramid.
+    pub levels: u32,
+    /// 1: the frame drew layer 1 (the march looks for hits there too).
+    pub two_layers: u32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
+    /// Level offsets in the packed pyramid (up to 8).
+    pub offsets: [[u32; 4]; 2],
+    /// Level widths in texels (up to 8).
+    pub widths: [[u32; 4]; 2],
 }
 
+const _: () = assert!(std::mem::size_of::<ReflectionsUniform>() == 112);
 mirrored!(
     ReflectionsUniform,
     "reflections.wgsl",
     "Reflections",
-    [sky, max_distance, thickness, tiles_x, tiles_y, env_width, env_height, with_emission]
+    [
+        ambient,
+        max_distance,
+        thickness,
+        tiles_x,
+        tiles_y,
+        env_width,
+        env_height,
+        levels,
+        two_layers,
+        offsets,
+        widths
+    ]
 );
+
+impl ReflectionsUniform {
+    /// The constants for `settings` at `width` x `height` over a nearest-depth pyramid of
+    /// `layout`, with layer 1 when `two_layers`: hit surfaces are shaded with the scene's
+    /// `ambient` radiance; missed rays see it too, or the environment map of `environment`'s
+    /// size.
+    pub fn new(
+        settings: &ReflectionSettings,
+        (width, height): (u32, u32),
+        layout: &PyramidLayout,
+        two_layers: bool,
+        ambient: [f32; 3],
+        environment: Option<(u32, u32)>,
+    ) -> Self {
+        let (mut offsets, mut widths) = ([[0; 4]; 2], [[0; 4]; 2]);
+        for (i, l) in layout.levels.iter().enumerate().take(8) {
+            offsets[i / 4][i % 4] = l.offset;
+            widths[i / 4][i % 4] = l.width;
+        }
+        let (env_width, env_height) = environment.unwrap_or((0, 0));
+        ReflectionsUniform {
+            ambient,
+            max_distance: settings.max_distance,
+            thickness: settings.thickness,
+            tiles_x: width.div_ceil(8),
+            tiles_y: height.div_ceil(8),
+            env_width,
+            env_height,
+            levels: layout.levels.len().min(8) as u32,
+            two_layers: u32::from(two_layers),
+            _pad: 0,
+            offsets,
+            widths,
+        }
+    }
+}
 
 /// Mirrors `struct Direct` in `wgsl/direct.wgsl`.
 #[repr(C)]

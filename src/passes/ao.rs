@@ -1,7 +1,7 @@
 //! `wgsl/ao.wgsl`: two-layer ambient obscurance, with its depth pyramids and blur.
 
 use super::blur::Blur;
-use super::pyramid::Pyramid;
+use super::pyramid::{Pyramid, PyramidKind};
 use super::{FrameContext, Recorder, Stage};
 use crate::frame::AoUniform;
 use crate::gpu::{self, slots::ao as slot};
@@ -75,7 +75,7 @@ impl Stage for AoStage {
                 let layers = 1 + usize::from(self.two_layers);
                 for layer in 0..layers {
                     let (gbuffer, target) = (ctx.gbuffer[layer], &self.pyramids[layer]);
-                    self.pyramid.record(ctx, &mut pass, gbuffer, target);
+                    self.pyramid.record(ctx, &mut pass, PyramidKind::RotatedGrid, gbuffer, target);
                 }
             }
             PassId::Ao => {

@@ -93,8 +93,6 @@ pub(crate) struct FrameContext<'a> {
     pub direct: [&'a wgpu::Buffer; 2],
     /// The ambient visibility the composite reads, when obscurance runs.
     pub av: Option<&'a wgpu::Buffer>,
-    /// Outgoing radiance B of each layer, when radiosity runs.
-    pub outgoing: Option<[&'a wgpu::Buffer; 2]>,
     /// The irradiance the composite reads, when radiosity runs.
     pub irradiance: Option<&'a wgpu::Buffer>,
     /// The reflected radiance, when reflections run.

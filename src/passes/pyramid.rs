@@ -4,6 +4,15 @@ use super::FrameContext;
 use crate::frame::{LevelUniform, PyramidLayout};
 use crate::gpu::{self, slots::pyramid as slot};
 
+/// Which chain a pyramid holds (`wgsl/pyramid.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PyramidKind {
+    /// One depth of each 2x2 block in a rotated grid (the obscurance's taps).
+    RotatedGrid,
+    /// The nearest depth of each 2x2 block (the reflections' hierarchical march).
+    Nearest,
+}
+
 /// The per-level constants of one image size's pyramid.
 pub(crate) struct Pyramid {
     layout: PyramidLayout,
@@ -28,17 +37,22 @@ impl Pyramid {
         &self.layout
     }
 
-    /// Records the pyramid of `gbuffer` into `target`.
+    /// Records the `kind` pyramid of `gbuffer` into `target`.
     pub(crate) fn record(
         &self,
         ctx: &FrameContext<'_>,
         pass: &mut wgpu::ComputePass<'_>,
+        kind: PyramidKind,
         gbuffer: &wgpu::Buffer,
         target: &wgpu::Buffer,
     ) {
         let defines = ctx.settings.precision.defines();
+        let above = match kind {
+            PyramidKind::RotatedGrid => "pyramid_level",
+            PyramidKind::Nearest => "pyramid_nearest",
+        };
         for (i, level) in self.layout.levels.iter().enumerate() {
-            let entry = if i == 0 { "pyramid_base" } else { "pyramid_level" };
+            let entry = if i == 0 { "pyramid_base" } else { above };
             let pipeline = ctx.pipelines.get(ctx.device, "pyramid", entry, &defines, &[]);
             let entries =
                 [(slot::LEVEL, &self.levels[i]), (slot::GBUFFER, gbuffer), (slot::PYRAMID, target)];

@@ -1,6 +1,7 @@
 //! `wgsl/reflections.wgsl`: screen-space reflections against both layers, in reflective tiles
 //! only.
 
+use super::pyramid::{Pyramid, PyramidKind};
 use super::{FrameContext, Recorder, Stage};
 use crate::SceneBuffers;
 use crate::frame::ReflectionsUniform;
@@ -8,10 +9,13 @@ use crate::gpu::{self, slots::reflections as slot};
 use crate::plan::PassId;
 use crate::settings::Settings;
 
-/// The reflections: constants, the reflective tiles and their indirect arguments, and the
-/// reflected radiance (rgb, times the reflectivity) and confidence (a) per pixel.
+/// The reflections: constants, layer 0's nearest-depth pyramid, the reflective tiles and their
+/// indirect arguments, and the reflected radiance (rgb, times the reflectivity) and confidence
+/// (a) per pixel.
 pub(crate) struct ReflectionsStage {
     uniform: wgpu::Buffer,
+    pyramid: Pyramid,
+    nearest: wgpu::Buffer,
     tiles: wgpu::Buffer,
     args: wgpu::Buffer,
     output: wgpu::Buffer,
@@ -28,7 +32,10 @@ impl ReflectionsStage {
         let pixels = u64::from(s.width) * u64::from(s.height);
         let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
         let none = wgpu::BufferUsages::empty();
+        let pyramid = Pyramid::new(device, s.width, s.height);
         ReflectionsStage {
+            nearest: storage("deep-gbuffer.reflections.nearest", pyramid.layout().bytes(), none),
+            pyramid,
             uniform: gpu::uniform_buffer_for::<ReflectionsUniform>(
                 device,
                 "deep-gbuffer.reflections",
@@ -46,28 +53,24 @@ impl ReflectionsStage {
         }
     }
 
-    /// Writes the frame's constants: `environment` is the map's size (`None`: the scene's
-    /// ambient sky), `with_emission` whether the radiance read is the radiosity's B.
+    /// Writes the frame's constants: `two_layers` whether the frame draws layer 1,
+    /// `environment` the map's size (`None`: the scene's ambient sky).
     pub(crate) fn prepare(
         &self,
         queue: &wgpu::Queue,
         s: &Settings,
         scene: &SceneBuffers,
+        two_layers: bool,
         environment: Option<(u32, u32)>,
-        with_emission: bool,
     ) {
-        let (env_width, env_height) = environment.unwrap_or((0, 0));
-        let uniform = ReflectionsUniform {
-            sky: scene.info().ambient.to_array(),
-            max_distance: s.reflections.max_distance,
-            thickness: s.reflections.thickness,
-            tiles_x: self.tiles_x,
-            tiles_y: self.tiles_y,
-            env_width,
-            env_height,
-            with_emission: u32::from(with_emission),
-            _pad: [0; 2],
-        };
+        let uniform = ReflectionsUniform::new(
+            &s.reflections,
+            (s.width, s.height),
+            self.pyramid.layout(),
+            two_layers,
+            scene.info().ambient.to_array(),
+            environment,
+        );
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 
@@ -83,22 +86,30 @@ impl Stage for ReflectionsStage {
         rec.encoder().clear_buffer(&self.tiles, 0, None);
         rec.encoder().clear_buffer(&self.output, 0, None);
         let mut pass = rec.pass(id);
-        // The radiosity pass's B is the fuller outgoing radiance (it adds the previous frame's
-        // indirect light to direct and emission).
-        let radiance = ctx.outgoing.unwrap_or(ctx.direct);
-        let entries = [
+        self.pyramid.record(ctx, &mut pass, PyramidKind::Nearest, ctx.gbuffer[0], &self.nearest);
+        let mut entries = vec![
             (slot::FRAME, ctx.frame),
             (slot::PARAMS, &self.uniform),
             (slot::GBUFFER, ctx.gbuffer[0]),
-            (slot::GBUFFER1_DEPTH, ctx.raster.vis1()),
-            (slot::RADIANCE0, radiance[0]),
-            (slot::RADIANCE1, radiance[1]),
+            (slot::GBUFFER1, ctx.gbuffer[1]),
+            (slot::DIRECT0, ctx.direct[0]),
+            (slot::DIRECT1, ctx.direct[1]),
             (slot::TILES, &self.tiles),
             (slot::ARGS, &self.args),
             (slot::REFLECTIONS, &self.output),
             (slot::ENVIRONMENT_MAP, ctx.environment.unwrap_or(&self.no_environment)),
+            (slot::NEAREST, &self.nearest),
         ];
-        let defines = ctx.settings.precision.defines();
+        // A hit surface is shaded as the composite shades it, with the terms the frame has.
+        let mut defines = ctx.settings.precision.defines();
+        for (define, s, buffer) in
+            [("AO", slot::AV, ctx.av), ("RADIOSITY", slot::IRRADIANCE, ctx.irradiance)]
+        {
+            if let Some(buffer) = buffer {
+                defines.push(define);
+                entries.push((s, buffer));
+            }
+        }
         let get = |entry| ctx.pipelines.get(ctx.device, "reflections", entry, &defines, &[]);
         let groups = gpu::dispatch_size((self.tiles_x * self.tiles_y).div_ceil(64));
         get("reflections_classify").dispatch(ctx.device, &mut pass, &entries, groups);

@@ -97,6 +97,11 @@ fn gword_depth(w0: GWord) -> f32 {
     return bitcast<f32>(w0.x);
 }
 
+// The world-space normal held by a sample's first word (0 where there is no surface).
+fn gword_normal(w0: GWord) -> vec3<f32> {
+    return select(vec3<f32>(0.0), oct_decode(unpack2x16snorm(w0.y)), bitcast<f32>(w0.x) > 0.0);
+}
+
 fn gbuffer_decode(w0: vec4<u32>, w1: vec4<u32>) -> GSample {
     var s: GSample;
     s.depth = bitcast<f32>(w0.x);
@@ -128,6 +133,11 @@ fn gbuffer_encode(s: GSample) -> array<vec4<f32>, 4> {
 // The view depth held by a sample's first word (0: no surface).
 fn gword_depth(w0: GWord) -> f32 {
     return w0.x;
+}
+
+// The world-space normal held by a sample's first word.
+fn gword_normal(w0: GWord) -> vec3<f32> {
+    return w0.yzw;
 }
 
 fn gbuffer_decode(w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>) -> GSample {
