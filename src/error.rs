@@ -47,7 +47,7 @@ pub enum Error {
     #[error("the device lacks the feature {0}")]
     MissingFeature(&'static str),
     /// A size or count is beyond what the device allows.
-    #[error("{what} needs {needed} but the device allows at most {limit}")]
+    #[error("{what} needs {needed} {unit} but the device allows at most {limit} {unit}")]
     ExceedsLimit {
         /// What is too big.
         what: String,
@@ -55,6 +55,18 @@ pub enum Error {
         needed: u64,
         /// The device limit.
         limit: u64,
+        /// What `needed` and `limit` count (`bytes`, `storage buffers`).
+        unit: &'static str,
+    },
+    /// A G-buffer layer the last frame did not draw was asked for.
+    #[error(
+        "layer {layer} was not drawn (the last frame drew {drawn} layer(s); the plan draws layer 1 only for an effect that reads it)"
+    )]
+    LayerNotDrawn {
+        /// The layer asked for.
+        layer: usize,
+        /// Layers the last frame drew (0 before the first frame).
+        drawn: usize,
     },
     /// An imported buffer does not match its declared size or usage.
     #[error("imported buffer `{name}`: {message}")]

@@ -32,6 +32,11 @@
 //! # Ok(()) }
 //! ```
 
+/// The README's code runs as a test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub mod cpu;
 pub mod environment;
 mod error;
@@ -50,6 +55,12 @@ pub mod sweep;
 pub mod testing;
 #[cfg(feature = "truth")]
 pub mod truth;
+
+/// The vector and matrix types of the public API.
+pub use glam;
+/// The wgpu this crate is built on (version 30): a host shares its device and buffers with the
+/// renderer, so it uses this one.
+pub use wgpu;
 
 pub use environment::Environment;
 pub use error::{Error, Result};

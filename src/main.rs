@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
@@ -89,37 +89,37 @@ struct SweepArgs {
     #[arg(long, default_value_t = 256)]
     spp: u32,
     /// Obscurance estimators to sweep (comma separated).
-    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().ao_estimator)]
+    #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().ao_estimator))]
     ao_estimator: Vec<AoEstimator>,
     /// Obscurance slice counts to sweep (horizon, bitmask).
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().ao_slices)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_slices))]
     ao_slices: Vec<u32>,
     /// Obscurance tap counts to sweep.
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().ao_samples)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_samples))]
     ao_samples: Vec<u32>,
     /// Radiosity tap counts to sweep.
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().radiosity_samples)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_samples))]
     radiosity_samples: Vec<u32>,
     /// Layer counts to sweep (1, 2).
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().layers)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().layers))]
     layers: Vec<u32>,
     /// G-buffer encodings to sweep.
-    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().precision)]
+    #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().precision))]
     precision: Vec<Precision>,
     /// Radiosity gather radii to sweep, in scene units.
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().radiosity_radius)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_radius))]
     radiosity_radius: Vec<f32>,
     /// Obscurance pyramid level offsets to sweep (a tap at h pixels reads level log2 h - offset).
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().mip_offset)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().mip_offset))]
     mip_offset: Vec<u32>,
     /// Layer separations Δz to sweep, in scene units.
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().dz)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
     /// Layer-1 variants to sweep.
-    #[arg(long, value_delimiter = ',', value_enum, default_values_t = deep_gbuffer::sweep::Grid::default().layer1)]
+    #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().layer1))]
     layer1: Vec<Layer1Variant>,
     /// Resolution scales to sweep (the frame at this fraction of --size, compared at --size).
-    #[arg(long, value_delimiter = ',', default_values_t = deep_gbuffer::sweep::Grid::default().scale)]
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().scale))]
     scale: Vec<f32>,
     /// Equirectangular EXR that missed rays see (else the scene's ambient sky).
     #[arg(long)]
@@ -165,7 +165,7 @@ struct TruthArgs {
     /// Write the truth as linear EXR; its per-pixel standard error goes to FILE-stderr.exr.
     #[arg(long)]
     exr: Option<PathBuf>,
-    /// Write the truth as PNG (ao, indirect: values in [0, 1] as they are; reflections, full:
+    /// Write the truth as PNG (ao: values in [0, 1] as they are; indirect, reflections, full:
     /// tone mapped as `render --out`).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -304,14 +304,16 @@ struct RenderArgs {
     /// Frames to render (the outputs are the last frame's).
     #[arg(long, default_value_t = 1)]
     frames: u32,
-    /// Degrees the camera orbits about the target (around the up axis) over all frames.
+    /// Degrees the camera orbits about the target (around the up axis) over all frames: the
+    /// first frame at 0, the last at this angle.
     #[arg(long, default_value_t = 0.0)]
     orbit: f32,
     /// Write every frame as DIR/frame_NNNN.png.
     #[arg(long)]
     out_seq: Option<PathBuf>,
-    /// Print the plan: which passes the frame runs, and why the others do not.
-    #[arg(long)]
+    /// Print the plan (which passes a frame runs, and why the others do not) and stop, without
+    /// rendering.
+    #[arg(long, conflicts_with_all = ["out", "exr", "layers", "timings", "out_seq"])]
     plan: bool,
     /// Effects to run: `auto` (all the scene calls for) or a list such as `ao,direct`.
     #[arg(long, default_value = "auto")]
@@ -342,6 +344,23 @@ struct RenderArgs {
     /// Damping delta of the indirect light fed back into the next frame's radiosity, in (0, 1].
     #[arg(long, default_value_t = RadiositySettings::default().damping)]
     damping: f32,
+}
+
+/// A list's default as the option takes it, comma separated (made once, when the parser is
+/// built, and kept for the program's life).
+fn listed<T: std::fmt::Display>(values: &[T]) -> &'static str {
+    let text: Vec<String> = values.iter().map(T::to_string).collect();
+    Box::leak(text.join(",").into_boxed_str())
+}
+
+/// As [`listed`], for values named as the command line spells them.
+fn listed_names<T: ValueEnum>(values: &[T]) -> &'static str {
+    let names: Vec<String> = values
+        .iter()
+        .filter_map(|v| v.to_possible_value())
+        .map(|v| v.get_name().to_owned())
+        .collect();
+    Box::leak(names.join(",").into_boxed_str())
 }
 
 fn parse_boost(s: &str) -> std::result::Result<Boost, String> {
@@ -413,13 +432,17 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let mut ao = AoSettings::default();
     args.ao.apply(&mut ao);
     ao.validate()?;
+    for path in [&args.out, &args.exr].into_iter().flatten() {
+        output::check_writable(path)?;
+    }
     let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
-    let message =
-        format!("tracing {:?} at {w}x{h}, {} rays per pixel, rows", args.effect, args.spp);
-    let bar = progress_bar(u64::from(h), message);
+    let effect = args.effect.to_possible_value().expect("every effect is listed");
+    let effect = effect.get_name();
+    let message = format!("tracing {effect} at {w}x{h}, {} rays per pixel, rows", args.spp);
+    let bar = Progress::new(u64::from(h), message);
     let started = std::time::Instant::now();
-    let progress = || bar.inc(1);
+    let progress = || bar.inc();
     let (spp, seed, bounces) = (args.spp, args.seed, args.bounces);
     let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
     let env = environment.as_ref();
@@ -430,10 +453,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         TruthEffect::Reflections => tracer.reflections(&scene, &shot, env, bounces, &progress)?,
         TruthEffect::Full => tracer.full(&scene, &shot, env, bounces, &progress)?,
     };
-    bar.finish_and_clear();
+    bar.finish();
     println!(
-        "truth {:?}: {w}x{h}, {} rays per pixel, {:.1} s; mean standard error {:.5}",
-        args.effect,
+        "truth {effect}: {w}x{h}, {} rays per pixel, {:.1} s; mean standard error {:.5}",
         args.spp,
         started.elapsed().as_secs_f32(),
         image.mean_stderr()
@@ -446,11 +468,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     }
     if let Some(path) = &args.out {
         match args.effect {
-            TruthEffect::Ao | TruthEffect::Indirect => {
-                output::write_png_display(path, w, h, &image.value)?
-            }
-            // Radiance: tone mapped as `render --out` maps its image.
-            TruthEffect::Reflections | TruthEffect::Full => {
+            TruthEffect::Ao => output::write_png_display(path, w, h, &image.value)?,
+            // Radiance and irradiance: tone mapped as `render --out` maps its image.
+            TruthEffect::Indirect | TruthEffect::Reflections | TruthEffect::Full => {
                 output::write_png_linear(path, w, h, &output::tonemap(&image.value, 1.0))?
             }
         }
@@ -527,13 +547,45 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     Ok(())
 }
 
-fn progress_bar(len: u64, message: String) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len).with_style(
-        indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len}, {eta} left")
-            .expect("a valid template"),
-    );
-    bar.set_message(message);
-    bar
+/// Progress on stderr: a bar on a terminal; else (piped, logged) a plain line at each tenth.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    message: String,
+    len: u64,
+    done: std::sync::atomic::AtomicU64,
+}
+
+impl Progress {
+    fn new(len: u64, message: String) -> Self {
+        use std::io::IsTerminal;
+        let bar = std::io::stderr().is_terminal().then(|| {
+            let style =
+                indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len}, {eta} left")
+                    .expect("a valid template");
+            let bar = indicatif::ProgressBar::new(len).with_style(style);
+            bar.set_message(message.clone());
+            bar
+        });
+        Progress { bar, message, len: len.max(1), done: Default::default() }
+    }
+
+    /// One more step done (from any thread).
+    fn inc(&self) {
+        if let Some(bar) = &self.bar {
+            bar.inc(1);
+            return;
+        }
+        let done = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if done * 10 / self.len > (done - 1) * 10 / self.len {
+            eprintln!("{}: {done}/{}", self.message, self.len);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
@@ -562,26 +614,26 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
-    let bar = progress_bar(
+    let bar = Progress::new(
         sweep::Truth::rows(&scene, h),
         format!("ground truth, {} rays per pixel", args.spp),
     );
     let env = environment.as_ref();
-    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, env, &|| bar.inc(1))?;
-    bar.finish_and_clear();
-    let bar = progress_bar(configurations.len() as u64 + 1, "configurations".into());
+    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, env, &|| bar.inc())?;
+    bar.finish();
+    let bar = Progress::new(configurations.len() as u64 + 1, "configurations".into());
     // One unrecorded measurement first: on lavapipe the first configuration a process measures
     // can run its raster tens of times slower in every frame (704 ms against 16 ms measured).
     if let Some(first) = configurations.first() {
         sweep::measure(&gpu.device, &gpu.queue, &buffers, &camera, &truth, first, env)?;
-        bar.inc(1);
+        bar.inc();
     }
     let mut rows = Vec::new();
     for k in &configurations {
         rows.push(sweep::measure(&gpu.device, &gpu.queue, &buffers, &camera, &truth, k, env)?);
-        bar.inc(1);
+        bar.inc();
     }
-    bar.finish_and_clear();
+    bar.finish();
     let heading = format!(
         "Sweep of {} at {w}x{h} on {}; truth {} rays per pixel, {} bounces (noise: obscurance {:.4}, irradiance {:.4}, image {:.4}); {} settling and {} measured frames turning {} degrees each",
         args.scene,
@@ -614,7 +666,9 @@ fn scene_and_camera(
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    scene.ensure_lights();
+    if scene.ensure_lights() {
+        eprintln!("note: the scene has no light; it is lit by the default sun and sky");
+    }
     let mut cam = scene.camera_or_default();
     if let Some(spec) = camera {
         let near_given = spec.split(',').any(|t| t.trim().starts_with("near="));
@@ -702,6 +756,13 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             message: format!("{} (must be finite and > 0)", args.exposure),
         });
     }
+    // Where the outputs go, before any work: a wrong path fails now, not after the frames.
+    for path in [&args.out, &args.exr, &args.timings].into_iter().flatten() {
+        output::check_writable(path)?;
+    }
+    for dir in [&args.layers, &args.out_seq].into_iter().flatten() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.clone(), source: e })?;
+    }
     let (scene, mut camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
@@ -710,7 +771,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         renderer.set_environment(&gpu.device, Some(&Environment::load_exr(path)?))?;
     }
     if args.plan {
+        // The plan alone: what a frame would run, without rendering one.
         println!("{}", renderer.plan(&buffers));
+        return Ok(());
     }
     if args.frames == 0 || !args.orbit.is_finite() {
         return Err(Error::InvalidSetting {
@@ -718,12 +781,11 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             message: "at least one frame, and a finite orbit".into(),
         });
     }
-    if let Some(dir) = &args.out_seq {
-        std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.clone(), source: e })?;
-    }
     let start = camera.clone();
+    let bar = (args.frames > 1).then(|| Progress::new(u64::from(args.frames), "frames".into()));
     for i in 0..args.frames {
-        camera = start.orbited(args.orbit * i as f32 / args.frames as f32);
+        let turn = if args.frames > 1 { i as f32 / (args.frames - 1) as f32 } else { 0.0 };
+        camera = start.orbited(args.orbit * turn);
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
             let hdr = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.hdr_buffer())?;
@@ -735,6 +797,16 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
                 &output::tonemap(&hdr, args.exposure),
             )?;
         }
+        if let Some(bar) = &bar {
+            // Waits for the frame, so the count follows the GPU, not the queue.
+            gpu.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
+            bar.inc();
+        }
+    }
+    if let Some(bar) = &bar {
+        bar.finish();
     }
     let layer_count = renderer.last_plan().map_or(1, |p| p.layers as usize);
     let layers = (0..layer_count)
@@ -794,19 +866,18 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         let json = serde_json::to_string_pretty(&file).expect("plain data serializes");
         output::write_bytes(path, json.as_bytes())?;
     }
-    if args.out.is_none()
-        && args.exr.is_none()
-        && args.layers.is_none()
-        && args.timings.is_none()
-        && !args.plan
-    {
+    if args.out.is_none() && args.exr.is_none() && args.layers.is_none() && args.timings.is_none() {
         eprintln!("rendered {w}x{h}; nothing written (give --out, --exr, --layers or --timings)");
     }
     Ok(())
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    private_runtime_dir();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return argument_error(e),
+    };
     let result = match cli.command {
         Command::Render(args) => render(&cli.adapter, *args),
         Command::Info => info(&cli.adapter),
@@ -818,6 +889,63 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Help and version print as asked (exit 0); a wrong argument is one line, `error: ...` and
+/// where to look, with exit code 1 like every other error.
+fn argument_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let _ = e.print();
+            ExitCode::SUCCESS
+        }
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = e.print();
+            ExitCode::FAILURE
+        }
+        _ => {
+            let text = e.render().to_string();
+            let line =
+                text.lines().find(|l| !l.trim().is_empty()).unwrap_or("error: bad arguments");
+            let line = line.trim_end().trim_end_matches('.');
+            let mut line = if line.starts_with("error:") {
+                line.to_string()
+            } else {
+                format!("error: {line}")
+            };
+            // The values an enumerated option takes, which clap puts on a line of their own.
+            if let Some(values) = text.lines().map(str::trim).find(|l| l.starts_with("[possible")) {
+                line = format!("{line} {values}");
+            }
+            eprintln!("{line} (`--help` lists the options)");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Mesa's window-system layer warns on every run when `XDG_RUNTIME_DIR` is unset or not a
+/// directory, though this program opens no window: give it a private one (mode 700) in the
+/// temporary folder.
+fn private_runtime_dir() {
+    let usable =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if usable {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+        let uid = std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(0);
+        let dir = std::env::temp_dir().join(format!("deep-gbuffer-runtime-{uid}"));
+        let made = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        let ours = std::fs::metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
+        if (made.is_ok() || ours) && std::fs::metadata(&dir).is_ok_and(|m| m.mode() & 0o077 == 0) {
+            // SAFETY: called first thing in `main`, before any thread is started, so nothing
+            // reads the environment concurrently.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
         }
     }
 }

@@ -326,9 +326,10 @@ impl Renderer {
         let needed = Self::required_limits().max_storage_buffers_per_shader_stage;
         if limits.max_storage_buffers_per_shader_stage < needed {
             return Err(Error::ExceedsLimit {
-                what: "storage buffers per shader stage".into(),
+                what: "a shader stage".into(),
                 needed: u64::from(needed),
                 limit: u64::from(limits.max_storage_buffers_per_shader_stage),
+                unit: "storage buffers",
             });
         }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
@@ -337,11 +338,14 @@ impl Renderer {
         if gbuffer_bytes > binding_limit {
             return Err(Error::ExceedsLimit {
                 what: format!(
-                    "a {}x{} G-buffer layer ({:?})",
-                    settings.width, settings.height, settings.precision
+                    "a {}x{} G-buffer layer ({} precision)",
+                    settings.width,
+                    settings.height,
+                    settings.precision.name()
                 ),
                 needed: gbuffer_bytes,
                 limit: binding_limit,
+                unit: "bytes",
             });
         }
         Ok(())
@@ -426,6 +430,7 @@ impl Renderer {
                         what: format!("a {}x{} environment map", env.width(), env.height()),
                         needed: bytes.len() as u64,
                         limit,
+                        unit: "bytes",
                     });
                 }
                 let texels =
@@ -796,25 +801,38 @@ impl Renderer {
         self.stages.resolve.gbuffer(layer)
     }
 
-    /// Reads a visibility buffer back (waits for the GPU).
+    /// Refuses a layer the last frame did not draw.
+    fn check_drawn(&self, layer: usize) -> Result<()> {
+        let drawn = self.plan.as_ref().map_or(0, |p| p.layers as usize);
+        if layer >= drawn {
+            return Err(Error::LayerNotDrawn { layer, drawn });
+        }
+        Ok(())
+    }
+
+    /// Reads a visibility buffer back (waits for the GPU); a layer the last frame did not draw
+    /// is [`Error::LayerNotDrawn`].
     pub fn read_visibility(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         layer: usize,
     ) -> Result<Vec<u64>> {
+        self.check_drawn(layer)?;
         let bytes = gpu::read_buffer(device, queue, self.visibility_buffer(layer))?;
         let n = (self.settings.width * self.settings.height) as usize;
         Ok(bytemuck::pod_collect_to_vec::<u8, u64>(&bytes[..n * 8]))
     }
 
-    /// Reads and decodes a G-buffer layer (waits for the GPU).
+    /// Reads and decodes a G-buffer layer (waits for the GPU); a layer the last frame did not
+    /// draw is [`Error::LayerNotDrawn`].
     pub fn read_gbuffer(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         layer: usize,
     ) -> Result<GBufferLayer> {
+        self.check_drawn(layer)?;
         let bytes = gpu::read_buffer(device, queue, self.gbuffer_buffer(layer))?;
         let s = &self.settings;
         GBufferLayer::decode(&bytes, s.width, s.height, s.precision)

@@ -35,6 +35,14 @@ pub enum Precision {
 }
 
 impl Precision {
+    /// The encoding's name, as `--precision` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::Full => "full",
+            Precision::Packed => "packed",
+        }
+    }
+
     /// The WGSL defines of this encoding (`PACKED` or none).
     pub fn defines(self) -> Vec<&'static str> {
         match self {

@@ -127,6 +127,16 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--ao-slices".into(), "0".into()], "ao.slices"),
         (vec!["render".into(), "--ao-thickness=-1".into()], "ao.thickness"),
         (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
+        // Wrong arguments, as the parser finds them: one line, exit 1, like the rest.
+        (vec!["render".into(), "--nope".into()], "unexpected argument '--nope'"),
+        (vec!["render".into(), "--size".into(), "abc".into()], "`abc` is not WxH"),
+        (vec!["render".into(), "--ao-estimator".into(), "foo".into()], "sao, horizon, bitmask"),
+        (vec!["render".into(), "--plan".into(), "--out".into(), "x.png".into()], "--plan"),
+        (vec!["frobnicate".into()], "unrecognized subcommand"),
+        // Outputs are checked before the scene is even loaded.
+        (vec!["render".into(), "--out".into(), "/nonexistent/x.png".into()], "/nonexistent"),
+        (vec!["render".into(), "--exr".into(), "/".into()], "not a regular file"),
+        (vec!["truth".into(), "--out".into(), "/nonexistent/t.png".into()], "/nonexistent"),
     ];
     for (args, needle) in cases {
         let out = cli().args(&args).output().unwrap();
@@ -140,6 +150,36 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         assert!(ours[0].contains(needle), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
+}
+
+/// `--plan` prints the plan and renders nothing; a multi-frame render reports its progress on
+/// stderr (plain lines when piped); with no `XDG_RUNTIME_DIR` Mesa says nothing about it.
+#[test]
+fn plan_alone_progress_and_a_quiet_runtime_dir() {
+    let out = cli()
+        .args(["render", "builtin:grid-2000", "--size", "32x24", "--plan"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("reflections: runs") && stdout.contains("passes:"), "{stdout}");
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let dir = out_dir("progress");
+    let out = cli()
+        .args(["render", "builtin:cornell", "--size", "16x12", "--frames", "20", "--out"])
+        .arg(dir.join("last.png"))
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 10, "a line at each tenth: {stderr}");
+    assert_eq!(lines[9], "frames: 20/20", "{stderr}");
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    assert!(dir.join("last.png").exists());
 }
 
 #[test]

@@ -361,8 +361,9 @@ fn ultra_hd() {
     let settings = Settings { timings: false, ..Settings::with_size(w, h) };
     if needed > limit {
         match Renderer::new(&g.device, &g.queue, settings) {
-            Err(deep_gbuffer::Error::ExceedsLimit { what, needed: n, limit: l }) => {
+            Err(deep_gbuffer::Error::ExceedsLimit { what, needed: n, limit: l, unit }) => {
                 assert!(what.contains("3840x2160"), "{what}");
+                assert_eq!(unit, "bytes");
                 assert_eq!((n, l), (needed, limit));
             }
             other => panic!("{:?}", other.map(|_| ())),

@@ -178,3 +178,32 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
         s.validate().unwrap();
     }
 }
+
+/// A layer the last frame did not draw is a typed error, not an empty or a stale layer: before
+/// any frame, layer 1 of a one-layer frame, and a layer past the two.
+#[test]
+fn reading_a_layer_the_frame_did_not_draw_is_refused() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let settings = Settings { layers: 1, timings: false, ..Settings::with_size(16, 12) };
+    let mut renderer = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings).unwrap();
+    let refused = |r: &deep_gbuffer::Renderer, layer: usize, drawn: usize| {
+        match r.read_gbuffer(&g.device, &g.queue, layer) {
+            Err(deep_gbuffer::Error::LayerNotDrawn { layer: l, drawn: d }) => {
+                assert_eq!((l, d), (layer, drawn))
+            }
+            other => panic!("layer {layer}: {:?}", other.map(|_| ())),
+        }
+        assert!(matches!(
+            r.read_visibility(&g.device, &g.queue, layer),
+            Err(deep_gbuffer::Error::LayerNotDrawn { .. })
+        ));
+    };
+    refused(&renderer, 0, 0);
+    renderer.render(&g.device, &g.queue, &buffers, &scene.camera_or_default()).unwrap();
+    assert_eq!(renderer.last_plan().unwrap().layers, 1);
+    assert!(renderer.read_gbuffer(&g.device, &g.queue, 0).is_ok());
+    refused(&renderer, 1, 1);
+    refused(&renderer, 7, 1);
+}

@@ -74,6 +74,7 @@ impl ShadowStage {
                 what: format!("{total} shadow-map faces of {res}x{res}"),
                 needed: face_bytes * total as u64,
                 limit,
+                unit: "bytes",
             });
         }
         let uniform = || {

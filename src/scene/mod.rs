@@ -352,9 +352,19 @@ impl Scene {
         self.camera.clone().unwrap_or_else(|| self.framing_camera())
     }
 
-    /// Adds the default lighting (a sun and a sky ambient) when the scene has no light.
-    pub fn ensure_lights(&mut self) {
-        if self.lights.is_empty() {
+    /// The scene lit by the default lighting (a sun that casts shadows and a sky ambient) when
+    /// it has no light of its own, else as it is ([`ensure_lights`](Scene::ensure_lights)).
+    /// Loading never adds lights: a file without lights renders dark unless the host asks.
+    pub fn with_default_lights(mut self) -> Self {
+        self.ensure_lights();
+        self
+    }
+
+    /// Adds the default lighting (a sun and a sky ambient) when the scene has no light; whether
+    /// it did.
+    pub fn ensure_lights(&mut self) -> bool {
+        let unlit = self.lights.is_empty();
+        if unlit {
             self.lights.push(Light {
                 name: "sun".into(),
                 kind: LightKind::Directional { direction: Vec3::new(-0.4, -1.0, -0.3).normalize() },
@@ -366,6 +376,7 @@ impl Scene {
                 self.ambient = Vec3::new(0.25, 0.3, 0.4);
             }
         }
+        unlit
     }
 
     /// Checks what the GPU passes rely on: a non-empty scene, indices and material ids in range,

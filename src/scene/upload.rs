@@ -144,6 +144,7 @@ impl SceneBuffers {
                     what: format!("the scene's {what} buffer"),
                     needed: bytes as u64,
                     limit,
+                    unit: "bytes",
                 });
             }
             Ok(())
