@@ -133,7 +133,8 @@ enum TruthEffect {
     Ao,
     /// Diffuse indirect irradiance by path tracing (--bounces surfaces per path).
     Indirect,
-    /// Mirror reflections: reflectivity times the radiance along the mirror direction.
+    /// Reflections: reflectivity times the mean radiance over the glossy lobe (the mirror
+    /// direction for roughness 0).
     Reflections,
     /// The full image by path tracing, with the same lights, materials and sky.
     Full,
@@ -185,6 +186,9 @@ struct TruthArgs {
     /// The GPU estimate's radiosity (with --compare).
     #[command(flatten)]
     radiosity: RadiosityArgs,
+    /// The GPU estimate's reflections (with --compare).
+    #[command(flatten)]
+    reflections: ReflectionArgs,
     /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
     #[arg(long)]
     compare: bool,
@@ -258,6 +262,32 @@ impl RadiosityArgs {
     }
 }
 
+/// The reflections' settings (render, and truth's GPU estimate). Those not given keep the
+/// default's value.
+#[derive(clap::Args)]
+struct ReflectionArgs {
+    /// How far a reflection ray is followed, in scene units [default: to the screen's edge].
+    #[arg(long)]
+    reflection_distance: Option<f32>,
+    /// How far behind a surface a reflection ray may pass and still hit it, in scene units
+    /// [default: 0.1].
+    #[arg(long)]
+    reflection_thickness: Option<f32>,
+    /// Directions averaged over the glossy lobe of a surface of roughness 0.5 or more (fewer
+    /// for smoother ones; 1: the mirror ray alone) [default: 8].
+    #[arg(long)]
+    reflection_lobe_samples: Option<u32>,
+}
+
+impl ReflectionArgs {
+    /// Sets what was given on `r`.
+    fn apply(&self, r: &mut deep_gbuffer::ReflectionSettings) {
+        r.max_distance = self.reflection_distance.unwrap_or(r.max_distance);
+        r.thickness = self.reflection_thickness.unwrap_or(r.thickness);
+        r.lobe_samples = self.reflection_lobe_samples.unwrap_or(r.lobe_samples);
+    }
+}
+
 #[derive(clap::Args)]
 struct RenderArgs {
     #[command(flatten)]
@@ -328,6 +358,8 @@ struct RenderArgs {
     ao: AoArgs,
     #[command(flatten)]
     radiosity: RadiosityArgs,
+    #[command(flatten)]
+    reflections: ReflectionArgs,
     /// How the spiral radiosity gather normalises its taps (cosine conserves energy; paper is
     /// 2 pi / M).
     #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
@@ -432,6 +464,11 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let mut ao = AoSettings::default();
     args.ao.apply(&mut ao);
     ao.validate()?;
+    // The GPU estimate's settings, checked before the truth is traced.
+    let mut settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
+    args.radiosity.apply(&mut settings.radiosity);
+    args.reflections.apply(&mut settings.reflections);
+    settings.validate()?;
     for path in [&args.out, &args.exr].into_iter().flatten() {
         output::check_writable(path)?;
     }
@@ -478,9 +515,6 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     if args.compare {
         let gpu = open_gpu(adapter)?;
         let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
-        let mut settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
-        args.radiosity.apply(&mut settings.radiosity);
-        settings.validate()?;
         let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
         renderer.set_environment(&gpu.device, env)?;
         if args.frames == 0 {
@@ -749,6 +783,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     }
     args.ao.apply(&mut settings.ao);
     args.radiosity.apply(&mut settings.radiosity);
+    args.reflections.apply(&mut settings.reflections);
     settings.validate()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::InvalidSetting {

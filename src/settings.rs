@@ -467,11 +467,20 @@ pub struct ReflectionSettings {
     pub max_distance: f32,
     /// How far behind a surface a ray may pass and still hit it, in scene units.
     pub thickness: f32,
+    /// Directions averaged over the glossy lobe (GGX, alpha = roughness^2) of a surface of
+    /// roughness 0.5 or more, in 1..=64; a smoother surface takes fewer in proportion to its
+    /// roughness (at least 2), and roughness 0 is a mirror. 1 traces the mirror ray alone.
+    pub lobe_samples: u32,
 }
 
 impl Default for ReflectionSettings {
     fn default() -> Self {
-        ReflectionSettings { enabled: true, max_distance: f32::INFINITY, thickness: 0.1 }
+        ReflectionSettings {
+            enabled: true,
+            max_distance: f32::INFINITY,
+            thickness: 0.1,
+            lobe_samples: 8,
+        }
     }
 }
 
@@ -488,6 +497,12 @@ impl ReflectionSettings {
             return Err(Error::setting(
                 "reflections.thickness",
                 format!("{} (must be finite and > 0)", self.thickness),
+            ));
+        }
+        if !(1..=64).contains(&self.lobe_samples) {
+            return Err(Error::setting(
+                "reflections.lobe_samples",
+                format!("{} (must be in 1..=64)", self.lobe_samples),
             ));
         }
         Ok(())

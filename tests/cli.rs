@@ -127,6 +127,8 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--ao-slices".into(), "0".into()], "ao.slices"),
         (vec!["render".into(), "--ao-thickness=-1".into()], "ao.thickness"),
         (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
+        (vec!["render".into(), "--reflection-lobe-samples".into(), "0".into()], "lobe_samples"),
+        (vec!["truth".into(), "--reflection-thickness=-1".into()], "reflections.thickness"),
         // Wrong arguments, as the parser finds them: one line, exit 1, like the rest.
         (vec!["render".into(), "--nope".into()], "unexpected argument '--nope'"),
         (vec!["render".into(), "--size".into(), "abc".into()], "`abc` is not WxH"),

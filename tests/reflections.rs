@@ -389,24 +389,32 @@ fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
     );
 }
 
-/// The ray's length and the shell's thickness: a bad value is a typed error naming the setting;
+/// The ray's length, the shell's thickness and the lobe's directions: a bad value is a typed
+/// error naming the setting;
 /// an infinite length (the default) follows rays to the screen's edge.
 #[test]
 fn invalid_reflection_settings_are_refused() {
     let g = gpu();
     let with = |reflections| Settings { reflections, ..Settings::with_size(8, 8) };
-    for (max_distance, thickness, name) in [
-        (0.0, 0.1, "reflections.max_distance"),
-        (-1.0, 0.1, "reflections.max_distance"),
-        (f32::NAN, 0.1, "reflections.max_distance"),
-        (f32::INFINITY, 0.0, "reflections.thickness"),
-        (f32::INFINITY, f32::INFINITY, "reflections.thickness"),
+    for (max_distance, thickness, lobe_samples, name) in [
+        (0.0, 0.1, 8, "reflections.max_distance"),
+        (-1.0, 0.1, 8, "reflections.max_distance"),
+        (f32::NAN, 0.1, 8, "reflections.max_distance"),
+        (f32::INFINITY, 0.0, 8, "reflections.thickness"),
+        (f32::INFINITY, f32::INFINITY, 8, "reflections.thickness"),
+        (f32::INFINITY, 0.1, 0, "reflections.lobe_samples"),
+        (f32::INFINITY, 0.1, 65, "reflections.lobe_samples"),
     ] {
-        let s = deep_gbuffer::ReflectionSettings { max_distance, thickness, enabled: true };
+        let s = deep_gbuffer::ReflectionSettings {
+            max_distance,
+            thickness,
+            lobe_samples,
+            enabled: true,
+        };
         match Renderer::new(&g.device, &g.queue, with(s)) {
             Err(Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
             Err(e) => panic!("{e}"),
-            Ok(_) => panic!("{name} = {max_distance}, {thickness} accepted"),
+            Ok(_) => panic!("{name} = {max_distance}, {thickness}, {lobe_samples} accepted"),
         }
     }
     let unbounded = deep_gbuffer::ReflectionSettings::default();

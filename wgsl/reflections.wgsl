@@ -54,7 +54,8 @@ struct Reflections {
     levels: u32,
     // 1: the frame drew layer 1.
     two_layers: u32,
-    _pad0: u32,
+    // Directions averaged over a rough surface's glossy lobe (1: the mirror ray alone).
+    lobe_samples: u32,
     offsets: array<vec4<u32>, 2>,
     widths: array<vec4<u32>, 2>,
 }
@@ -79,6 +80,8 @@ struct Reflections {
 #endif
 
 const TAU_R: f32 = 6.28318531;
+// The fractional golden ratio: the lobe samples' second coordinates (a Fibonacci lattice).
+const GOLDEN: f32 = 0.618034;
 const PI_R: f32 = 3.14159265;
 
 fn env_texel(x: i32, y: i32) -> vec3<f32> {
@@ -237,37 +240,35 @@ fn seen_at(q: u32, layer: u32) -> vec3<f32> {
     return shaded(sample_at(q), direct0[q].rgb, visibility, e, params.ambient);
 }
 
-fn trace(pixel: vec2<u32>) -> vec4<f32> {
-    let s = sample_at(pixel.y * frame.width + pixel.x);
-    if !(s.depth > 0.0) || !(s.reflectivity > 0.0) {
-        return vec4<f32>(0.0);
-    }
-    let a = vec2<f32>(pixel) + 0.5;
-    let p = view_position(frame, a, s.depth);
-    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
-    var v = normalize(p);
-    if frame.ortho != 0u {
-        v = vec3<f32>(0.0, 0.0, -1.0);
-    }
-    let r = reflect(v, n);
-    let sky = environment(normalize(mat_mul(frame.inv_view, vec4<f32>(r, 0.0)).xyz));
+// Where a reflected ray first meets a layer: pixel q, the layer (2: none) and the screen
+// position where the ray entered the pixel.
+struct Hit {
+    q: u32,
+    layer: u32,
+    xy: vec2<f32>,
+}
+
+// Marches the ray from view-space point p (pixel `pixel`, view depth `depth`) along unit r.
+fn march(pixel: vec2<u32>, depth: f32, p: vec3<f32>, r: vec3<f32>) -> Hit {
+    var hit = Hit(0u, 2u, vec2<f32>(0.0));
     // The ray's length: the distance, the unbounded stand-in, and the near plane.
-    var reach_3d = min(params.max_distance, UNBOUNDED * s.depth);
+    var reach_3d = min(params.max_distance, UNBOUNDED * depth);
     if r.z > 0.0 {
         reach_3d = min(reach_3d, (-frame.near * NEAR_MARGIN - p.z) / r.z);
     }
     if !(reach_3d > 0.0) {
-        return vec4<f32>(s.reflectivity * sky, 0.0);
+        return hit;
     }
     // The segment on screen from a (parameter 0) to the ray's end (1), and its depth.
+    let a = vec2<f32>(pixel) + 0.5;
     let e = p + r * reach_3d;
     let d = project(e) - a;
-    let k0 = linear_of(s.depth);
+    let k0 = linear_of(depth);
     let k1 = linear_of(-e.z);
     let t_end = screen_exit(a, d);
     let reach = max(abs(d.x), abs(d.y));
     if !(reach > 0.5) {
-        return vec4<f32>(s.reflectivity * sky, 0.0);
+        return hit;
     }
     // A thousandth of a pixel along the segment: past a cell's border into the next.
     let nudge = 1e-3 / reach;
@@ -275,8 +276,6 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     let inside = vec2<f32>(f32(frame.width), f32(frame.height)) - 1e-3;
     var level = 0u;
     var t = cell_exit(a, d, pixel, 1.0) + nudge;
-    var colour = sky;
-    var confidence = 0.0;
     for (var i = 0u; i < ITERATIONS && t < t_end; i++) {
         let xy = clamp(a + d * t, vec2<f32>(0.0), inside);
         let size = f32(1u << level);
@@ -297,17 +296,143 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
         let q = cell.y * frame.width + cell.x;
         let layer = layer_hit(q, r, xy, z_in, a + d * t_out, z_out);
         if layer < 2u {
-            let seen = seen_at(q, layer);
-            let uv = xy / vec2<f32>(f32(frame.width), f32(frame.height));
-            let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
-            confidence = clamp(edge / EDGE_FADE, 0.0, 1.0);
-            colour = mix(sky, seen, confidence);
-            break;
+            return Hit(q, layer, xy);
         }
         t = t_out + nudge;
         level = min(1u, top);
     }
-    return vec4<f32>(s.reflectivity * colour, confidence);
+    return hit;
+}
+
+// How much a hit at screen position xy is trusted: 1, fading to 0 within EDGE_FADE of the
+// screen's edges.
+fn edge_confidence(xy: vec2<f32>) -> f32 {
+    let uv = xy / vec2<f32>(f32(frame.width), f32(frame.height));
+    let edge = min(min(uv.x, 1.0 - uv.x), min(uv.y, 1.0 - uv.y));
+    return clamp(edge / EDGE_FADE, 0.0, 1.0);
+}
+
+// The environment along view-space direction d.
+fn environment_view(d: vec3<f32>) -> vec3<f32> {
+    return environment(normalize(mat_mul(frame.inv_view, vec4<f32>(d, 0.0)).xyz));
+}
+
+// The view depth of `layer` at pixel q (0: no surface).
+fn layer_depth(q: u32, layer: u32) -> f32 {
+    if layer == 1u {
+        return gword_depth(gbuffer1[q * G_WORDS]);
+    }
+    return gword_depth(gbuffer[q * G_WORDS]);
+}
+
+// A unit vector's orthonormal tangents (Duff et al. 2017, "Building an orthonormal basis,
+// revisited").
+fn tangents(n: vec3<f32>) -> mat2x3<f32> {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return mat2x3<f32>(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y));
+}
+
+// The direction that a GGX microfacet (roughness alpha) reflects wo (unit, towards the viewer)
+// into about the unit normal n, for the visible normal u picks (Heitz 2018, "Sampling the GGX
+// distribution of visible normals"); a direction below the surface is mirrored above it.
+// src/cpu/reflections.rs (`lobe_direction`) is the same on the CPU.
+fn lobe_direction(n: vec3<f32>, wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let tb = tangents(n);
+    let ve = normalize(vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), max(dot(wo, n), 1e-4)));
+    let vh = normalize(vec3<f32>(alpha * ve.x, alpha * ve.y, ve.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(lensq);
+    }
+    let t2 = cross(vh, t1);
+    let radius = sqrt(u.x);
+    let phi = TAU_R * u.y;
+    let p1 = radius * cos(phi);
+    let blend = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - blend) * sqrt(max(1.0 - p1 * p1, 0.0)) + blend * radius * sin(phi);
+    let nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    var l = 2.0 * dot(ve, m) * m - ve;
+    l.z = abs(l.z);
+    return normalize(l.x * tb[0] + l.y * tb[1] + l.z * n);
+}
+
+fn trace(pixel: vec2<u32>) -> vec4<f32> {
+    let s = sample_at(pixel.y * frame.width + pixel.x);
+    if !(s.depth > 0.0) || !(s.reflectivity > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let p = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
+    var v = normalize(p);
+    if frame.ortho != 0u {
+        v = vec3<f32>(0.0, 0.0, -1.0);
+    }
+    let r = reflect(v, n);
+    let hit = march(pixel, s.depth, p, r);
+    // What the mirror ray sees.
+    var mirror = environment_view(r);
+    var mirror_trust = 0.0;
+    if hit.layer < 2u {
+        mirror_trust = edge_confidence(hit.xy);
+        mirror = mix(mirror, seen_at(hit.q, hit.layer), mirror_trust);
+    }
+    let alpha = s.roughness * s.roughness;
+    if !(alpha > 0.0) || params.lobe_samples <= 1u {
+        return vec4<f32>(s.reflectivity * mirror, mirror_trust);
+    }
+    // A glossy lobe: each direction the lobe reflects into is taken to travel as far as the
+    // mirror ray did, and sees the surface the screen holds there when a layer's depth lies
+    // within the thickness plus a quarter of that distance of it; otherwise it sees what the
+    // mirror ray saw. When the mirror ray found nothing, each direction sees the environment.
+    var reach = -1.0;
+    if hit.layer < 2u {
+        let centre = vec2<f32>(f32(hit.q % frame.width), f32(hit.q / frame.width)) + 0.5;
+        reach = length(view_position(frame, centre, layer_depth(hit.q, hit.layer)) - p);
+    }
+    // The lobe widens with the roughness: all its directions from roughness 0.5 up, fewer
+    // (at least two) in proportion below.
+    let k = clamp(u32(ceil(f32(params.lobe_samples) * min(2.0 * s.roughness, 1.0))), 2u, params.lobe_samples);
+    var sum = vec3<f32>(0.0);
+    var trust = 0.0;
+    for (var i = 0u; i < k; i++) {
+        let u = vec2<f32>((f32(i) + 0.5) / f32(k), fract(f32(i) * GOLDEN));
+        let l = lobe_direction(n, -v, alpha, u);
+        if reach < 0.0 {
+            sum += environment_view(l);
+            continue;
+        }
+        var colour = mirror;
+        var confidence = mirror_trust;
+        let e = p + l * reach;
+        let tolerance = params.thickness + 0.25 * reach;
+        if e.z < -frame.near * NEAR_MARGIN {
+            let xy = project(e);
+            if all(xy >= vec2<f32>(0.0)) && all(xy < vec2<f32>(f32(frame.width), f32(frame.height))) {
+                let q = u32(xy.y) * frame.width + u32(xy.x);
+                var layer = 2u;
+                let d0 = layer_depth(q, 0u);
+                if d0 > 0.0 && abs(d0 + e.z) <= tolerance {
+                    layer = 0u;
+                } else if params.two_layers != 0u {
+                    let d1 = layer_depth(q, 1u);
+                    if d1 > 0.0 && abs(d1 + e.z) <= tolerance {
+                        layer = 1u;
+                    }
+                }
+                if layer < 2u {
+                    confidence = edge_confidence(xy);
+                    colour = mix(environment_view(l), seen_at(q, layer), confidence);
+                }
+            }
+        }
+        sum += colour;
+        trust += confidence;
+    }
+    return vec4<f32>(s.reflectivity * sum / f32(k), trust / f32(k));
 }
 
 @compute @workgroup_size(8, 8)

@@ -187,10 +187,49 @@ impl HitShading<'_> {
     }
 }
 
+/// A unit vector's orthonormal tangents (Duff et al. 2017), as `tangents`.
+fn tangents(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// The direction that a GGX microfacet of roughness `alpha` (the square of the material's
+/// roughness) reflects `wo` (unit, towards the viewer) into about the unit normal `n`, for the
+/// visible normal that `u` in [0, 1)^2 picks (Heitz 2018, "Sampling the GGX distribution of
+/// visible normals"); a direction below the surface is mirrored above it. With `u` uniform this
+/// samples the glossy lobe the reflections average over (the ground truth does); `alpha` 0 gives
+/// the mirror direction. As `lobe_direction` in `wgsl/reflections.wgsl`.
+pub fn lobe_direction(n: Vec3, wo: Vec3, alpha: f32, u: Vec2) -> Vec3 {
+    let (t, b) = tangents(n);
+    let ve = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n).max(1e-4)).normalize();
+    let vh = Vec3::new(alpha * ve.x, alpha * ve.y, ve.z).normalize();
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
+    let t2 = vh.cross(t1);
+    let radius = u.x.sqrt();
+    let phi = std::f32::consts::TAU * u.y;
+    let p1 = radius * phi.cos();
+    let blend = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - blend) * (1.0 - p1 * p1).max(0.0).sqrt() + blend * radius * phi.sin();
+    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+    let m = Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize();
+    let mut l = 2.0 * ve.dot(m) * m - ve;
+    l.z = l.z.abs();
+    (l.x * t + l.y * b + l.z * n).normalize()
+}
+
+/// The fractional golden ratio: the lobe samples' second coordinates.
+const GOLDEN: f32 = 0.618034;
+
 /// Reflected radiance (rgb, scaled by reflectivity) and confidence (w) of every pixel, marching
 /// layer 0 and, when the uniform's `two_layers` is set, layer 1, and shading what the rays hit
-/// with `shading`. `environment` is the map the uniform's `env_width` refers to (`None`: the
-/// constant ambient).
+/// with `shading`; rough surfaces average their glossy lobe (`lobe_samples` directions).
+/// `environment` is the map the uniform's `env_width` refers to (`None`: the constant ambient).
 pub fn reflections(
     f: &FrameUniform,
     u: &ReflectionsUniform,
@@ -205,6 +244,21 @@ pub fn reflections(
     let layer1 = (u.two_layers != 0).then_some(layer1);
     let march = March { f, u, layer0, layer1, nearest: nearest(&depth, &layout), layout };
     let ambient = Vec3::from(u.ambient);
+    let (w, h) = (f.width as f32, f.height as f32);
+    let sky = |d: Vec3| match environment {
+        Some(env) if u.env_width != 0 => {
+            env.sample(mat_mul(&f.inv_view, d.extend(0.0).to_array()).xyz().normalize())
+        }
+        _ => ambient,
+    };
+    let edge_confidence = |xy: Vec2| {
+        let uv = xy / Vec2::new(w, h);
+        (uv.x.min(1.0 - uv.x).min(uv.y.min(1.0 - uv.y)) / EDGE_FADE).clamp(0.0, 1.0)
+    };
+    let layer_depth = |q: usize, layer: u32| {
+        let s = &layers[layer as usize][q];
+        if s.depth > 0.0 { s.depth } else { 0.0 }
+    };
     let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
@@ -221,21 +275,59 @@ pub fn reflections(
             let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
             let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
             let r = v - 2.0 * n.dot(v) * n;
-            let sky = match environment {
-                Some(env) if u.env_width != 0 => {
-                    env.sample(mat_mul(&f.inv_view, r.extend(0.0).to_array()).xyz().normalize())
-                }
-                _ => ambient,
-            };
-            let (mut colour, mut confidence) = (sky, 0.0);
-            if let Some((q, layer, xy)) = march.trace(UVec2::new(x, y), s, r) {
-                let seen = shading.seen(layers, q, layer, ambient);
-                let uv = xy / Vec2::new(f.width as f32, f.height as f32);
-                let edge = uv.x.min(1.0 - uv.x).min(uv.y.min(1.0 - uv.y));
-                confidence = (edge / EDGE_FADE).clamp(0.0, 1.0);
-                colour = sky.lerp(seen, confidence);
+            let hit = march.trace(UVec2::new(x, y), s, r);
+            let (mut mirror, mut mirror_trust) = (sky(r), 0.0);
+            if let Some((q, layer, xy)) = hit {
+                mirror_trust = edge_confidence(xy);
+                mirror = mirror.lerp(shading.seen(layers, q, layer, ambient), mirror_trust);
             }
-            out[pi] = (s.reflectivity * colour).extend(confidence);
+            let alpha = s.roughness * s.roughness;
+            if alpha.is_nan() || alpha <= 0.0 || u.lobe_samples <= 1 {
+                out[pi] = (s.reflectivity * mirror).extend(mirror_trust);
+                continue;
+            }
+            // As the kernel: lobe directions travel as far as the mirror ray did.
+            let reach = hit.map(|(q, layer, _)| {
+                let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32);
+                (view_position(f, centre + 0.5, layer_depth(q, layer)) - p).length()
+            });
+            let share = (2.0 * s.roughness).min(1.0);
+            let k = ((u.lobe_samples as f32 * share).ceil() as u32).clamp(2, u.lobe_samples);
+            let (mut sum, mut trust) = (Vec3::ZERO, 0.0);
+            for i in 0..k {
+                let uv = Vec2::new((i as f32 + 0.5) / k as f32, (i as f32 * GOLDEN).fract());
+                let l = lobe_direction(n, -v, alpha, uv);
+                let Some(reach) = reach else {
+                    sum += sky(l);
+                    continue;
+                };
+                let (mut colour, mut confidence) = (mirror, mirror_trust);
+                let e = p + l * reach;
+                let tolerance = u.thickness + 0.25 * reach;
+                if e.z < -f.near * NEAR_MARGIN {
+                    let xy = project(f, e);
+                    if xy.x >= 0.0 && xy.y >= 0.0 && xy.x < w && xy.y < h {
+                        let q = (xy.y as u32 * f.width + xy.x as u32) as usize;
+                        let d0 = layer_depth(q, 0);
+                        let layer = if d0 > 0.0 && (d0 + e.z).abs() <= tolerance {
+                            Some(0)
+                        } else if u.two_layers != 0 {
+                            let d1 = layer_depth(q, 1);
+                            (d1 > 0.0 && (d1 + e.z).abs() <= tolerance).then_some(1)
+                        } else {
+                            None
+                        };
+                        if let Some(layer) = layer {
+                            confidence = edge_confidence(xy);
+                            let seen = shading.seen(layers, q, layer, ambient);
+                            colour = sky(l).lerp(seen, confidence);
+                        }
+                    }
+                }
+                sum += colour;
+                trust += confidence;
+            }
+            out[pi] = (s.reflectivity * sum / k as f32).extend(trust / k as f32);
         }
     }
     out

@@ -174,8 +174,8 @@ pub struct ReflectionsUniform {
     pub levels: u32,
     /// 1: the frame drew layer 1 (the march looks for hits there too).
     pub two_layers: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// [`ReflectionSettings::lobe_samples`].
+    pub lobe_samples: u32,
     /// Level offsets in the packed pyramid (up to 8).
     pub offsets: [[u32; 4]; 2],
     /// Level widths in texels (up to 8).
@@ -197,6 +197,7 @@ mirrored!(
         env_height,
         levels,
         two_layers,
+        lobe_samples,
         offsets,
         widths
     ]
@@ -231,7 +232,7 @@ impl ReflectionsUniform {
             env_height,
             levels: layout.levels.len().min(8) as u32,
             two_layers: u32::from(two_layers),
-            _pad: 0,
+            lobe_samples: settings.lobe_samples,
             offsets,
             widths,
         }

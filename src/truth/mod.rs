@@ -21,6 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::reflections::lobe_direction;
 use crate::environment::Environment;
 use crate::frame::CameraMatrices;
 use crate::frame::FrameUniform;
@@ -270,6 +271,18 @@ fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * d.dot(n) * n
 }
 
+/// A direction of the glossy lobe a surface of `roughness` (normal `n`) reflects the viewer's
+/// direction `v` into: the mirror direction for roughness 0, else one visible-normal sample of
+/// GGX with alpha = roughness^2 ([`lobe_direction`]).
+fn lobe(n: Vec3, v: Vec3, roughness: f32, rng: &mut ChaCha8Rng) -> Vec3 {
+    let alpha = roughness * roughness;
+    if alpha > 0.0 {
+        lobe_direction(n, v, alpha, Vec2::new(rng.random(), rng.random()))
+    } else {
+        reflect(-v, n)
+    }
+}
+
 /// The unit direction from world point `point` towards the camera of `f`.
 /// How far a primary hit is moved back towards the eye, relative to the scene's size: far above
 /// the rounding of a reconstructed point (about 1e-7 of it), so that the point lies in front of
@@ -389,8 +402,8 @@ impl Tracer {
     /// Radiance leaving surface `s` at `point` towards `v`, in the renderer's material model:
     /// emission, the lights through the BRDF, and while `depth` > 0 one cosine-distributed
     /// diffuse bounce (albedo times the radiance it brings: the cosine and 1/pi cancel with the
-    /// sampling density) plus reflectivity times the radiance along the mirror direction, each
-    /// traced on with `depth - 1`.
+    /// sampling density) plus reflectivity times the radiance along one direction of the glossy
+    /// lobe (the mirror direction for roughness 0; [`lobe`]), each traced on with `depth - 1`.
     #[expect(clippy::too_many_arguments, reason = "a path's state, spelled out")]
     fn outgoing(
         &self,
@@ -412,7 +425,7 @@ impl Tracer {
             out += s.diffuse * self.radiance(scene, light, origin, w, depth - 1, rng);
         }
         if s.reflectivity > 0.0 {
-            let r = reflect(-v, s.normal);
+            let r = lobe(s.normal, v, s.roughness, rng);
             out += s.reflectivity * self.radiance(scene, light, origin, r, depth - 1, rng);
         }
         out
@@ -485,15 +498,15 @@ impl Tracer {
         })
     }
 
-    /// Mirror reflections, the quantity the reflection pass estimates: at every pixel whose
-    /// surface reflects, its reflectivity times the radiance arriving along the mirror direction
-    /// of the view ray,
+    /// Reflections, the quantity the reflection pass estimates: at every pixel whose surface
+    /// reflects, its reflectivity times the mean radiance arriving over its glossy lobe,
     ///
     /// ```text
-    /// R(X) = reflectivity * L(X, reflect(-v, n)),
+    /// R(X) = reflectivity * E[L(X, l)],   l = the reflection of v about a GGX visible normal
     /// ```
     ///
-    /// where L is the sky's radiance (`environment`, else the scene's ambient) if the ray leaves
+    /// (alpha = roughness^2, sampled as Heitz 2018, a direction below the surface mirrored above
+    /// it: [`lobe_direction`]; the mirror direction `reflect(-v, n)` for roughness 0), where L is the sky's radiance (`environment`, else the scene's ambient) if the ray leaves
     /// the scene, else the radiance the surface it hits sends back ([`Tracer::full`]'s, with
     /// `bounces` more surfaces along each path). Pixels that do not reflect are not part of the
     /// image (not visible).
@@ -513,9 +526,10 @@ impl Tracer {
             if s.reflectivity <= 0.0 {
                 return None;
             }
-            let r = reflect(-towards_eye(&f, point), s.normal);
+            let v = towards_eye(&f, point);
             let origin = point + s.normal * eps;
             Some(sample_mean(spp, || {
+                let r = lobe(s.normal, v, s.roughness, rng);
                 s.reflectivity * self.radiance(scene, &lighting, origin, r, bounces, rng)
             }))
         })
@@ -524,8 +538,9 @@ impl Tracer {
     /// The full image, the quantity the composite estimates: the radiance each layer-0 surface
     /// sends to the camera, with the same lights, materials and sky (`environment`, else the
     /// scene's ambient) by path tracing: emission, the lights through the BRDF with shadow rays,
-    /// diffuse interreflection and mirror reflection, up to `bounces` surfaces after the first
-    /// along a path (diffuse paths cosine distributed, one per sample; a mirror adds its branch).
+    /// diffuse interreflection and glossy reflection, up to `bounces` surfaces after the first
+    /// along a path (diffuse paths cosine distributed, one per sample; a reflective surface adds
+    /// a branch along one direction of its lobe).
     /// Pixels without a surface are not part of the image.
     pub fn full(
         &self,
