@@ -85,6 +85,11 @@ struct SweepArgs {
     /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
+    /// Move the camera along its line of sight until the whole scene is in view (its direction
+    /// and field of view stay; the file's camera keeps its vertical field of view at any
+    /// aspect, so a tight one may cut the scene off).
+    #[arg(long)]
+    fit: bool,
     /// Rays per pixel of the ground truth.
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -154,6 +159,11 @@ struct TruthArgs {
     /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
+    /// Move the camera along its line of sight until the whole scene is in view (its direction
+    /// and field of view stay; the file's camera keeps its vertical field of view at any
+    /// aspect, so a tight one may cut the scene off).
+    #[arg(long)]
+    fit: bool,
     /// The effect to trace.
     #[arg(long, value_enum, default_value_t = TruthEffect::Ao)]
     effect: TruthEffect,
@@ -302,6 +312,11 @@ struct RenderArgs {
     /// scene's camera).
     #[arg(long)]
     camera: Option<String>,
+    /// Move the camera along its line of sight until the whole scene is in view (its direction
+    /// and field of view stay; the file's camera keeps its vertical field of view at any
+    /// aspect, so a tight one may cut the scene off).
+    #[arg(long)]
+    fit: bool,
     /// Write depth, normal and base colour of the layers the frame drew, and each lighting term
     /// (ao, direct, radiosity, indirect, reflections; those the frame ran), as PNG and EXR into
     /// this folder.
@@ -331,12 +346,14 @@ struct RenderArgs {
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
-    /// Frames to render (the outputs are the last frame's).
-    #[arg(long, default_value_t = 1)]
-    frames: u32,
+    /// Frames to render (the outputs are the last frame's) [default: until the radiosity
+    /// settles, when it runs: its mean irradiance changes by less than 0.5% over 4 frames, at
+    /// most 64 frames; else 1].
+    #[arg(long)]
+    frames: Option<u32>,
     /// Degrees the camera orbits about the target (around the up axis) over all frames: the
-    /// first frame at 0, the last at this angle.
-    #[arg(long, default_value_t = 0.0)]
+    /// first frame at 0, the last at this angle (needs --frames).
+    #[arg(long, default_value_t = 0.0, requires = "frames")]
     orbit: f32,
     /// Write every frame as DIR/frame_NNNN.png.
     #[arg(long)]
@@ -472,7 +489,12 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     for path in [&args.out, &args.exr].into_iter().flatten() {
         output::check_writable(path)?;
     }
-    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
+    let (scene, camera) = scene_and_camera(
+        &args.scene,
+        args.camera.as_deref(),
+        fit(args.fit, args.size),
+        &args.limits,
+    )?;
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let effect = args.effect.to_possible_value().expect("every effect is listed");
     let effect = effect.get_name();
@@ -643,7 +665,12 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         k.validate(w, h)?;
     }
     let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
-    let (scene, camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
+    let (scene, camera) = scene_and_camera(
+        &args.scene,
+        args.camera.as_deref(),
+        fit(args.fit, args.size),
+        &args.limits,
+    )?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;
@@ -690,10 +717,11 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
 }
 
 /// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its camera
-/// with the `--camera` changes applied.
+/// with the `--camera` changes applied, fitted to the scene at `aspect` when `fit`.
 fn scene_and_camera(
     spec: &str,
     camera: Option<&str>,
+    fit: Option<f32>,
     limits: &LimitArgs,
 ) -> Result<(Scene, Camera)> {
     let mut scene = Scene::from_spec_with(spec, &limits.limits())?;
@@ -712,7 +740,16 @@ fn scene_and_camera(
             *near = near.min(scene.near_plane_from(cam.eye));
         }
     }
+    if let Some(aspect) = fit {
+        cam = scene.fit_camera(&cam, aspect);
+        cam.validate()?;
+    }
     Ok((scene, cam))
+}
+
+/// The aspect `--fit` frames for, when given.
+fn fit(fit: bool, (w, h): (u32, u32)) -> Option<f32> {
+    fit.then(|| w as f32 / h.max(1) as f32)
 }
 
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {
@@ -743,6 +780,22 @@ fn info(adapter: &Option<String>) -> Result<()> {
     };
     println!("raster:   {path}");
     Ok(())
+}
+
+/// Most frames a still camera renders for its radiosity to settle (`render` without --frames).
+const SETTLE_MAX_FRAMES: u32 = 64;
+/// Frames between two looks at the radiosity while it settles.
+const SETTLE_STEP: u32 = 4;
+/// The radiosity has settled when its mean irradiance changed by at most this fraction over
+/// the last `SETTLE_STEP` frames.
+const SETTLE_CHANGE: f64 = 0.005;
+
+/// The mean irradiance (over pixels and channels) the composite reads from the radiosity.
+fn mean_irradiance(renderer: &Renderer, gpu: &Gpu) -> Result<f64> {
+    let Some(buffers) = renderer.radiosity_buffers() else { return Ok(0.0) };
+    let e = renderer.read_vec4(&gpu.device, &gpu.queue, buffers.irradiance)?;
+    let sum: f64 = e.iter().map(|v| f64::from(v.x + v.y + v.z)).filter(|v| v.is_finite()).sum();
+    Ok(sum / (3 * e.len().max(1)) as f64)
 }
 
 #[derive(serde::Serialize)]
@@ -798,7 +851,12 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     for dir in [&args.layers, &args.out_seq].into_iter().flatten() {
         std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.clone(), source: e })?;
     }
-    let (scene, mut camera) = scene_and_camera(&args.scene, args.camera.as_deref(), &args.limits)?;
+    let (scene, mut camera) = scene_and_camera(
+        &args.scene,
+        args.camera.as_deref(),
+        fit(args.fit, args.size),
+        &args.limits,
+    )?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;
@@ -810,16 +868,20 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         println!("{}", renderer.plan(&buffers));
         return Ok(());
     }
-    if args.frames == 0 || !args.orbit.is_finite() {
+    if args.frames == Some(0) || !args.orbit.is_finite() {
         return Err(Error::InvalidSetting {
             name: "frames",
             message: "at least one frame, and a finite orbit".into(),
         });
     }
+    // Without --frames, a still camera renders until the temporal radiosity settles.
+    let settle = args.frames.is_none() && renderer.plan(&buffers).runs(Effect::Radiosity);
+    let frames = args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES } else { 1 });
+    let mut last_mean: Option<f64> = None;
     let start = camera.clone();
-    let bar = (args.frames > 1).then(|| Progress::new(u64::from(args.frames), "frames".into()));
-    for i in 0..args.frames {
-        let turn = if args.frames > 1 { i as f32 / (args.frames - 1) as f32 } else { 0.0 };
+    let bar = (frames > 1).then(|| Progress::new(u64::from(frames), "frames".into()));
+    for i in 0..frames {
+        let turn = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 0.0 };
         camera = start.orbited(args.orbit * turn);
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
@@ -838,6 +900,22 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
                 .poll(wgpu::PollType::wait_indefinitely())
                 .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
             bar.inc();
+        }
+        if settle && (i + 1) % SETTLE_STEP == 0 {
+            let mean = mean_irradiance(&renderer, &gpu)?;
+            let settled = last_mean.is_some_and(|m| (mean - m).abs() <= SETTLE_CHANGE * mean);
+            if settled || i + 1 == frames {
+                if let Some(bar) = &bar {
+                    bar.finish();
+                }
+                let how = if settled { "settled" } else { "stopped unsettled" };
+                eprintln!(
+                    "note: the radiosity {how} after {} frames (--frames sets a count)",
+                    i + 1
+                );
+                break;
+            }
+            last_mean = Some(mean);
         }
     }
     if let Some(bar) = &bar {
@@ -943,18 +1021,21 @@ fn argument_error(e: clap::Error) -> ExitCode {
         }
         _ => {
             let text = e.render().to_string();
-            let line =
-                text.lines().find(|l| !l.trim().is_empty()).unwrap_or("error: bad arguments");
-            let line = line.trim_end().trim_end_matches('.');
-            let mut line = if line.starts_with("error:") {
-                line.to_string()
-            } else {
-                format!("error: {line}")
+            // The first paragraph: the message, and what clap puts on the lines below it (the
+            // arguments missing, the values an enumerated option takes).
+            let paragraph: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .skip_while(|l| l.is_empty())
+                .take_while(|l| !l.is_empty())
+                .collect();
+            let joined = paragraph.join(" ");
+            let line = joined.trim_end_matches('.');
+            let line = match line {
+                "" => "error: bad arguments".to_string(),
+                l if l.starts_with("error:") => l.to_string(),
+                l => format!("error: {l}"),
             };
-            // The values an enumerated option takes, which clap puts on a line of their own.
-            if let Some(values) = text.lines().map(str::trim).find(|l| l.starts_with("[possible")) {
-                line = format!("{line} {values}");
-            }
             eprintln!("{line} (`--help` lists the options)");
             ExitCode::FAILURE
         }

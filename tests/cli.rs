@@ -134,6 +134,7 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--size".into(), "abc".into()], "`abc` is not WxH"),
         (vec!["render".into(), "--ao-estimator".into(), "foo".into()], "sao, horizon, bitmask"),
         (vec!["render".into(), "--plan".into(), "--out".into(), "x.png".into()], "--plan"),
+        (vec!["render".into(), "--orbit".into(), "5".into()], "--frames"),
         (vec!["frobnicate".into()], "unrecognized subcommand"),
         // Outputs are checked before the scene is even loaded.
         (vec!["render".into(), "--out".into(), "/nonexistent/x.png".into()], "/nonexistent"),
@@ -182,6 +183,33 @@ fn plan_alone_progress_and_a_quiet_runtime_dir() {
     assert_eq!(lines[9], "frames: 20/20", "{stderr}");
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
     assert!(dir.join("last.png").exists());
+}
+
+/// Without `--frames`, a still camera renders until the radiosity settles, and says after how
+/// many frames; `--frames 1` renders one; a scene without radiosity renders one.
+#[test]
+fn render_settles_the_radiosity_unless_told_a_frame_count() {
+    let dir = out_dir("settle");
+    let run = |args: &[&str]| {
+        let out = cli()
+            .args(["render", "--size", "24x18", "--out"])
+            .arg(dir.join("settle.png"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let settled = run(&["builtin:cornell"]);
+    let note = settled.lines().find(|l| l.starts_with("note: the radiosity settled after "));
+    let frames: u32 = note
+        .and_then(|l| l.split_whitespace().nth(5))
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{settled}"));
+    assert!((8..=64).contains(&frames) && frames % 4 == 0, "{settled}");
+    assert!(!run(&["builtin:cornell", "--frames", "1"]).contains("radiosity"));
+    let plain = run(&["builtin:cornell", "--effects", "ao,direct,shadows"]);
+    assert!(!plain.contains("radiosity") && !plain.contains("frames:"), "{plain}");
 }
 
 #[test]

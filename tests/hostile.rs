@@ -14,13 +14,13 @@ const MEMORY_KIB: u64 = 4 << 20;
 /// Wall-clock time a run may take.
 const TIME_LIMIT: Duration = Duration::from_secs(60);
 
-/// Runs `render FILE` in `dir` under the limits; returns the exit code and stderr.
+/// Runs `render FILE` (one frame) in `dir` under the limits; returns the exit code and stderr.
 fn render_limited(dir: &Path, file: &str, out: &Path) -> (Option<i32>, String) {
     let mut child = Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -v {MEMORY_KIB}; exec \"$0\" \"$@\""))
         .arg(env!("CARGO_BIN_EXE_deep-gbuffer"))
-        .args(["render", file, "--size", "16x12", "--out"])
+        .args(["render", file, "--size", "16x12", "--frames", "1", "--out"])
         .arg(out)
         .current_dir(dir)
         .stdout(Stdio::null())

@@ -516,3 +516,32 @@ fn the_near_plane_follows_the_eye() {
     let above = Vec3::new(inside.x, hi.y + 2.0, inside.z);
     assert!((scene.near_plane_from(above) - 1.0).abs() < 1e-5, "half the way to the bounds");
 }
+
+/// `fit_camera` keeps the camera's direction and field of view and moves it until every vertex
+/// of the scene projects inside the view, for wide, square and tall images; the engine's own
+/// camera (a tight 18 degrees) cuts it off before.
+#[test]
+fn a_fitted_camera_sees_the_whole_scene() {
+    let scene = Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap();
+    let inside = |camera: &deep_gbuffer::Camera, aspect: f32| {
+        let m = camera.projection(aspect) * camera.view();
+        scene.positions.iter().all(|p| {
+            let c = m * p.extend(1.0);
+            c.w > 0.0 && (c.x / c.w).abs() <= 1.0 && (c.y / c.w).abs() <= 1.0
+        })
+    };
+    let own = scene.camera.clone().expect("the file has a camera");
+    assert!(!inside(&own, 4.0 / 3.0), "the file's camera cuts the engine off");
+    for aspect in [16.0 / 9.0, 1.0, 0.5] {
+        let fitted = scene.fit_camera(&own, aspect);
+        assert!(inside(&fitted, aspect), "aspect {aspect}");
+        let (a, b) = (own.target - own.eye, fitted.target - fitted.eye);
+        assert!(a.normalize().dot(b.normalize()) > 0.9999, "the direction stays");
+        let fov = |c: &deep_gbuffer::Camera| match c.projection {
+            deep_gbuffer::Projection::Perspective { fov_y_deg, .. } => fov_y_deg,
+            _ => unreachable!("a perspective camera"),
+        };
+        assert_eq!(fov(&fitted), fov(&own), "the field of view stays");
+        fitted.validate().unwrap();
+    }
+}

@@ -347,6 +347,36 @@ impl Scene {
         (outside * 0.5).max(floor)
     }
 
+    /// `camera` moved along its line of sight so that the scene's bounding sphere fits the view
+    /// at `aspect` (width / height) in both directions, looking at the sphere's centre, with a
+    /// near plane that cuts nothing; its direction, up and field of view stay (an orthographic
+    /// camera widens its view instead of moving).
+    pub fn fit_camera(&self, camera: &Camera, aspect: f32) -> Camera {
+        let (lo, hi) = self.bounds().unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        let center = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let forward = (camera.target - camera.eye).try_normalize().unwrap_or(Vec3::NEG_Z);
+        let mut fitted = camera.clone();
+        match &mut fitted.projection {
+            Projection::Perspective { fov_y_deg, near, .. } => {
+                let half_y = (fov_y_deg.to_radians() * 0.5).clamp(1e-3, 1.5);
+                let half_x = (half_y.tan() * aspect.max(1e-3)).atan();
+                let dist = radius / half_y.min(half_x).sin();
+                fitted.eye = center - forward * dist;
+                fitted.target = center;
+                *near = (dist - radius).max(dist * 1e-3) * 0.5;
+            }
+            Projection::Orthographic { height, near, far } => {
+                *height = 2.0 * radius / aspect.clamp(1e-3, 1.0);
+                fitted.eye = center - forward * (2.0 * radius);
+                fitted.target = center;
+                *near = near.min(radius * 0.5);
+                *far = far.max(4.0 * radius);
+            }
+        }
+        fitted
+    }
+
     /// The scene's camera, or one that frames its bounds.
     pub fn camera_or_default(&self) -> Camera {
         self.camera.clone().unwrap_or_else(|| self.framing_camera())
