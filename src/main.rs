@@ -901,7 +901,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
                 .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
             bar.inc();
         }
-        if settle && (i + 1) % SETTLE_STEP == 0 {
+        if settle && (i + 1).is_multiple_of(SETTLE_STEP) {
             let mean = mean_irradiance(&renderer, &gpu)?;
             let settled = last_mean.is_some_and(|m| (mean - m).abs() <= SETTLE_CHANGE * mean);
             if settled || i + 1 == frames {
