@@ -211,9 +211,9 @@ struct AoArgs {
     /// Obscurance estimator (see `wgsl/ao.wgsl`) [default: bitmask, or the preset's].
     #[arg(long, value_enum)]
     ao_estimator: Option<AoEstimator>,
-    /// Obscurance radius in scene units.
-    #[arg(long, default_value_t = AoSettings::default().radius)]
-    ao_radius: f32,
+    /// Obscurance radius in scene units [default: 0.5 times the scene's scale].
+    #[arg(long)]
+    ao_radius: Option<f32>,
     /// Obscurance taps per pixel [default: 32, or the preset's].
     #[arg(long)]
     ao_samples: Option<u32>,
@@ -233,7 +233,7 @@ struct AoArgs {
 impl AoArgs {
     /// Sets what was given on `ao`.
     fn apply(&self, ao: &mut AoSettings) {
-        ao.radius = self.ao_radius;
+        ao.radius = self.ao_radius.unwrap_or(ao.radius);
         ao.estimator = self.ao_estimator.unwrap_or(ao.estimator);
         ao.samples = self.ao_samples.unwrap_or(ao.samples);
         ao.slices = self.ao_slices.unwrap_or(ao.slices);
@@ -251,9 +251,9 @@ struct RadiosityArgs {
     /// Radiosity gather (see `wgsl/radiosity.wgsl`) [default: slices].
     #[arg(long, value_enum)]
     radiosity_estimator: Option<RadiosityEstimator>,
-    /// Radiosity gather radius in scene units.
-    #[arg(long, default_value_t = RadiositySettings::default().radius)]
-    radiosity_radius: f32,
+    /// Radiosity gather radius in scene units [default: 2 times the scene's scale].
+    #[arg(long)]
+    radiosity_radius: Option<f32>,
     /// Radiosity taps per pixel [default: 32, or the preset's].
     #[arg(long)]
     radiosity_samples: Option<u32>,
@@ -265,7 +265,7 @@ struct RadiosityArgs {
 impl RadiosityArgs {
     /// Sets what was given on `r`.
     fn apply(&self, r: &mut RadiositySettings) {
-        r.radius = self.radiosity_radius;
+        r.radius = self.radiosity_radius.unwrap_or(r.radius);
         r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
@@ -331,9 +331,10 @@ struct RenderArgs {
     /// Write per-pass GPU times (timestamp queries) as JSON.
     #[arg(long)]
     timings: Option<PathBuf>,
-    /// Minimum separation of layer 1 behind layer 0, in scene units.
-    #[arg(long, default_value_t = Settings::default().dz)]
-    dz: f32,
+    /// Minimum separation of layer 1 behind layer 0, in scene units [default: 0.05 times the
+    /// scene's scale].
+    #[arg(long)]
+    dz: Option<f32>,
     /// How layer 1 is rasterized.
     #[arg(long, value_enum, default_value_t = Layer1Variant::TwoPass)]
     layer1: Layer1Variant,
@@ -478,14 +479,6 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
 
 fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let (w, h) = args.size;
-    let mut ao = AoSettings::default();
-    args.ao.apply(&mut ao);
-    ao.validate()?;
-    // The GPU estimate's settings, checked before the truth is traced.
-    let mut settings = Settings { ao: ao.clone(), ..Settings::with_size(w, h) };
-    args.radiosity.apply(&mut settings.radiosity);
-    args.reflections.apply(&mut settings.reflections);
-    settings.validate()?;
     for path in [&args.out, &args.exr].into_iter().flatten() {
         output::check_writable(path)?;
     }
@@ -495,6 +488,15 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         fit(args.fit, args.size),
         &args.limits,
     )?;
+    // The GPU estimate's settings, checked before the truth is traced; the truth's obscurance
+    // has their radius.
+    let mut settings = scaled_defaults(&scene);
+    (settings.width, settings.height) = (w, h);
+    args.ao.apply(&mut settings.ao);
+    args.radiosity.apply(&mut settings.radiosity);
+    args.reflections.apply(&mut settings.reflections);
+    settings.validate()?;
+    let ao = settings.ao.clone();
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let effect = args.effect.to_possible_value().expect("every effect is listed");
     let effect = effect.get_name();
@@ -747,6 +749,21 @@ fn scene_and_camera(
     Ok((scene, cam))
 }
 
+/// The default settings with their lengths scaled to `scene`'s size
+/// ([`Settings::scale_for`]), said in a note when they are not the defaults.
+fn scaled_defaults(scene: &Scene) -> Settings {
+    let extent = scene.extent();
+    let scale = Settings::scale_for(extent);
+    let settings = Settings::default().scaled(scale);
+    if scale != 1.0 {
+        eprintln!(
+            "note: default lengths x{scale} for a scene {extent:.3} units across (obscurance radius {}, radiosity radius {}, dz {}; options override)",
+            settings.ao.radius, settings.radiosity.radius, settings.dz
+        );
+    }
+    settings
+}
+
 /// The aspect `--fit` frames for, when given.
 fn fit(fit: bool, (w, h): (u32, u32)) -> Option<f32> {
     fit.then(|| w as f32 / h.max(1) as f32)
@@ -812,32 +829,6 @@ struct TimingsFile<'a> {
 }
 
 fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
-    let mut settings = Settings {
-        width: args.size.0,
-        height: args.size.1,
-        dz: args.dz,
-        layer1: args.layer1,
-        atomics: args.atomics,
-        ao: AoSettings { enabled: !args.no_ao, ..AoSettings::default() },
-        radiosity: RadiositySettings {
-            normalization: args.normalization,
-            boost: args.boost,
-            damping: args.damping,
-            ..RadiositySettings::default()
-        },
-        effects: Effects::parse(&args.effects)?,
-        ..Settings::default()
-    };
-    if let Some(preset) = args.preset {
-        preset.apply(&mut settings);
-    }
-    if let Some(p) = args.precision {
-        settings.precision = p;
-    }
-    args.ao.apply(&mut settings.ao);
-    args.radiosity.apply(&mut settings.radiosity);
-    args.reflections.apply(&mut settings.reflections);
-    settings.validate()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::InvalidSetting {
             name: "exposure",
@@ -857,6 +848,27 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         fit(args.fit, args.size),
         &args.limits,
     )?;
+    let mut settings = scaled_defaults(&scene);
+    settings.width = args.size.0;
+    settings.height = args.size.1;
+    settings.dz = args.dz.unwrap_or(settings.dz);
+    settings.layer1 = args.layer1;
+    settings.atomics = args.atomics;
+    settings.ao.enabled = !args.no_ao;
+    settings.radiosity.normalization = args.normalization;
+    settings.radiosity.boost = args.boost;
+    settings.radiosity.damping = args.damping;
+    settings.effects = Effects::parse(&args.effects)?;
+    if let Some(preset) = args.preset {
+        preset.apply(&mut settings);
+    }
+    if let Some(p) = args.precision {
+        settings.precision = p;
+    }
+    args.ao.apply(&mut settings.ao);
+    args.radiosity.apply(&mut settings.radiosity);
+    args.reflections.apply(&mut settings.reflections);
+    settings.validate()?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;

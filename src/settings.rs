@@ -600,6 +600,35 @@ impl Settings {
         Settings { width, height, ..Settings::default() }
     }
 
+    /// How far across (the largest side of its bounds, in scene units) a scene is that the
+    /// default lengths suit: the Cornell box's 2 units.
+    pub const REFERENCE_EXTENT: f32 = 2.0;
+
+    /// The factor [`scaled`](Settings::scaled) applies for a scene `extent` units across: the
+    /// power of two nearest to `extent / REFERENCE_EXTENT` (1 for the Cornell box; steps of two
+    /// keep the settings still while a scene's bounds change a little). 1 for an extent that is
+    /// not finite and positive.
+    pub fn scale_for(extent: f32) -> f32 {
+        if !(extent.is_finite() && extent > 0.0) {
+            return 1.0;
+        }
+        (extent / Self::REFERENCE_EXTENT).log2().round().clamp(-60.0, 60.0).exp2()
+    }
+
+    /// These settings with every length multiplied by `scale`: the obscurance radius and bias,
+    /// the radiosity radius and history tolerance, Δz, and the reflections' distance and
+    /// thickness. Counts, pixels and fractions stay.
+    pub fn scaled(mut self, scale: f32) -> Self {
+        self.ao.radius *= scale;
+        self.ao.bias *= scale;
+        self.radiosity.radius *= scale;
+        self.radiosity.history_tolerance *= scale;
+        self.dz *= scale;
+        self.reflections.max_distance *= scale;
+        self.reflections.thickness *= scale;
+        self
+    }
+
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {

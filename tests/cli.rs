@@ -6,6 +6,10 @@ fn cli() -> Command {
     Command::new(env!("CARGO_BIN_EXE_deep-gbuffer"))
 }
 
+fn fixture_path(path: &str) -> String {
+    format!("{}/fixtures/{path}", env!("CARGO_MANIFEST_DIR"))
+}
+
 fn out_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("deep-gbuffer-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -167,7 +171,18 @@ fn plan_alone_progress_and_a_quiet_runtime_dir() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("reflections: runs") && stdout.contains("passes:"), "{stdout}");
-    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.lines().all(|l| l.starts_with("note: ")), "only notes: {stderr}");
+
+    // A model 743 units across: the default lengths follow its size, and the command says so.
+    let engine = fixture_path("engine/2CylinderEngine.gltf");
+    let out = cli().args(["render", &engine, "--size", "32x24", "--plan"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("note: default lengths x512") && stderr.contains("radius 256"),
+        "{stderr}"
+    );
 
     let dir = out_dir("progress");
     let out = cli()

@@ -207,3 +207,31 @@ fn reading_a_layer_the_frame_did_not_draw_is_refused() {
     refused(&renderer, 1, 1);
     refused(&renderer, 7, 1);
 }
+
+/// The default lengths suit a scene about 2 units across; `scale_for` gives the power of two
+/// nearest to a scene's size over that, and `scaled` multiplies every length by it, nothing
+/// else.
+#[test]
+fn default_lengths_follow_the_scene_size_in_powers_of_two() {
+    let cornell = Scene::from_spec("builtin:cornell").unwrap();
+    assert_eq!(Settings::scale_for(cornell.extent()), 1.0, "the Cornell box keeps the defaults");
+    let grid = Scene::from_spec("builtin:grid-20000").unwrap();
+    assert_eq!(Settings::scale_for(grid.extent()), 4.0, "9 units across");
+    for (extent, scale) in [(743.4, 512.0), (0.3, 0.125), (2.9, 2.0), (2.8, 1.0)] {
+        assert_eq!(Settings::scale_for(extent), scale, "{extent}");
+    }
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert_eq!(Settings::scale_for(bad), 1.0, "{bad}");
+    }
+    let (d, s) = (Settings::default(), Settings::default().scaled(4.0));
+    assert_eq!(
+        [s.ao.radius, s.ao.bias, s.radiosity.radius, s.radiosity.history_tolerance, s.dz],
+        [d.ao.radius, d.ao.bias, d.radiosity.radius, d.radiosity.history_tolerance, d.dz]
+            .map(|v| 4.0 * v)
+    );
+    assert_eq!(s.reflections.thickness, 4.0 * d.reflections.thickness);
+    assert_eq!(s.reflections.max_distance, f32::INFINITY);
+    let counts = |x: &Settings| (x.ao.samples, x.ao.slices, x.ao.thickness, x.radiosity.samples);
+    assert_eq!(counts(&s), counts(&d), "counts and fractions stay");
+    s.validate().unwrap();
+}

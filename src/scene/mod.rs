@@ -321,6 +321,11 @@ impl Scene {
         Some(it.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
     }
 
+    /// The largest side of the scene's bounds, in scene units (0 for an empty scene).
+    pub fn extent(&self) -> f32 {
+        self.bounds().map_or(0.0, |(lo, hi)| (hi - lo).max_element())
+    }
+
     /// A camera looking at the scene's bounds from the front (+z), slightly above.
     pub fn framing_camera(&self) -> Camera {
         let (lo, hi) = self.bounds().unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
