@@ -20,9 +20,20 @@ const PACKED_COLOR_TOLERANCE: f32 = 0.5 / 255.0 + 1e-4;
 const PACKED_NORMAL_TOLERANCE: f32 = 1e-3;
 
 fn compare(scene: &Scene, precision: Precision, width: u32, height: u32, color_tolerance: f32) {
+    compare_from(scene, &scene.camera_or_default(), precision, width, height, color_tolerance);
+}
+
+fn compare_from(
+    scene: &Scene,
+    camera: &deep_gbuffer::Camera,
+    precision: Precision,
+    width: u32,
+    height: u32,
+    color_tolerance: f32,
+) {
     let r = render(
         scene,
-        &scene.camera_or_default(),
+        camera,
         Settings { precision, timings: false, layers: 2, ..Settings::with_size(width, height) },
     );
     let g = gpu();
@@ -57,7 +68,10 @@ fn compare(scene: &Scene, precision: Precision, width: u32, height: u32, color_t
             );
             assert_abs_diff_eq!(a.roughness, b.roughness, epsilon = color_tolerance);
             assert_abs_diff_eq!(a.metallic, b.metallic, epsilon = 1e-3);
-            let e_tol = b.emissive.max_element() * 1e-3 + 1e-6;
+            assert_abs_diff_eq!(a.reflectivity, b.reflectivity, epsilon = color_tolerance);
+            // Relative: an emissive texture goes through the same sRGB decoding as the base
+            // colour, so its tolerance is the colour's (at least 1e-3 of the value).
+            let e_tol = b.emissive.max_element() * color_tolerance.max(1e-3) + 1e-6;
             assert_abs_diff_eq!(
                 a.emissive.to_array()[..],
                 b.emissive.to_array()[..],
@@ -100,6 +114,49 @@ fn textured_gltf_matches_cpu_reference() {
     let scene = Scene::load(&fixture("suzanne/Suzanne.gltf")).unwrap();
     assert!(!scene.textures.is_empty());
     compare(&scene, Precision::Full, 96, 72, TEXTURED_TOLERANCE);
+}
+
+/// Every texture slot the renderer reads (base colour, emissive, metallic-roughness), against
+/// the CPU resolve in both precisions, on a fixture whose textures vary across the view.
+#[test]
+fn every_texture_slot_matches_cpu_reference() {
+    let scene = Scene::load(&fixture("textured/textured-quad.gltf")).unwrap();
+    assert_eq!(scene.textures.len(), 3, "each image decoded once");
+    let m = &scene.materials[0];
+    assert!(m.base_color_texture.is_some() && m.emissive_texture.is_some());
+    assert!(m.metallic_roughness_texture.is_some());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("a normal texture (1)")),
+        "{:?}",
+        scene.warnings
+    );
+    let camera = deep_gbuffer::Camera::perspective(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 60.0, 0.1);
+    compare_from(&scene, &camera, Precision::Full, 64, 48, TEXTURED_TOLERANCE);
+    compare_from(
+        &scene,
+        &camera,
+        Precision::Packed,
+        64,
+        48,
+        PACKED_COLOR_TOLERANCE + TEXTURED_TOLERANCE,
+    );
+    // The textures reach the G-buffer: emission, roughness, metal and reflectivity vary.
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(64, 48) });
+    let g = gpu();
+    let layer = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let shown: Vec<&GSample> = layer.samples.iter().filter(|s| s.depth > 0.0).collect();
+    let spread = |f: &dyn Fn(&GSample) -> f32| {
+        let v: Vec<f32> = shown.iter().map(|s| f(s)).collect();
+        v.iter().copied().fold(f32::MIN, f32::max) - v.iter().copied().fold(f32::MAX, f32::min)
+    };
+    assert!(spread(&|s| s.emissive.x) > 1.0, "the emission checker");
+    assert!(spread(&|s| s.roughness) > 0.5, "the roughness ramp");
+    assert!(spread(&|s| s.metallic) > 0.9, "metal in one half");
+    assert!(spread(&|s| s.reflectivity) > 0.3, "reflectivity per texel");
+    assert!(
+        r.renderer.passes().contains(&deep_gbuffer::PassId::Reflections),
+        "a metal that reflects"
+    );
 }
 
 #[test]

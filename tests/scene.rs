@@ -40,10 +40,11 @@ fn cornell_fixture_loads_with_its_materials() {
 fn gltf_fixtures_load() {
     let suzanne = Scene::load(&fixture("suzanne/Suzanne.gltf")).unwrap();
     assert!(suzanne.triangle_count() > 3000);
+    assert_eq!(suzanne.textures.len(), 2, "the base-colour and metallic-roughness textures");
+    let m = &suzanne.materials[0];
     assert_eq!(
-        suzanne.textures.len(),
-        1,
-        "the base-colour texture (the metal-roughness map is not a base colour)"
+        (m.base_color_texture, m.metallic_roughness_texture, m.emissive_texture),
+        (Some(0), Some(1), None)
     );
     assert!(suzanne.uvs.iter().any(|uv| *uv != glam::Vec2::ZERO));
     suzanne.validate().unwrap();

@@ -320,10 +320,10 @@ fn rejection(t: u32) -> u32 {
 }
 
 // Whether material m names a texture that does not lie inside the texel buffer (resolve then
-// draws it with its base colour alone).
+// leaves that texture out).
 fn texture_outside(m: Material) -> bool {
 #if WRITE_L0
-    return (m.flags & MATERIAL_TEXTURED) != 0u && !texture_fits(m, arrayLength(&texels));
+    return textures_outside(m, arrayLength(&texels));
 #else
     return false;
 #endif

@@ -33,25 +33,25 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
-fn texel(m: Material, x: u32, y: u32) -> vec3<f32> {
-    let c = unpack4x8unorm(texels[m.texture_offset + y * m.texture_width + x]);
-    return srgb_to_linear(c.rgb);
+fn texel(t: TextureRef, x: u32, y: u32, srgb: bool) -> vec3<f32> {
+    let c = unpack4x8unorm(texels[t.offset + y * t.width + x]).rgb;
+    return select(c, srgb_to_linear(c), srgb);
 }
 
-// Bilinear, repeating, filtered in linear space.
-fn sample_texture(m: Material, uv: vec2<f32>) -> vec3<f32> {
-    let size = vec2<f32>(f32(m.texture_width), f32(m.texture_height));
+// Bilinear, repeating; sRGB texels are decoded before they are filtered.
+fn sample_texture(t: TextureRef, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
+    let size = vec2<f32>(f32(t.width), f32(t.height));
     let p = fract(uv) * size - 0.5;
     let f = fract(p);
     let i0 = vec2<i32>(floor(p));
-    let w = i32(m.texture_width);
-    let h = i32(m.texture_height);
+    let w = i32(t.width);
+    let h = i32(t.height);
     let x0 = u32((i0.x % w + w) % w);
     let y0 = u32((i0.y % h + h) % h);
-    let x1 = (x0 + 1u) % m.texture_width;
-    let y1 = (y0 + 1u) % m.texture_height;
-    let top = mix(texel(m, x0, y0), texel(m, x1, y0), f.x);
-    let bottom = mix(texel(m, x0, y1), texel(m, x1, y1), f.x);
+    let x1 = (x0 + 1u) % t.width;
+    let y1 = (y0 + 1u) % t.height;
+    let top = mix(texel(t, x0, y0, srgb), texel(t, x1, y0, srgb), f.x);
+    let bottom = mix(texel(t, x0, y1, srgb), texel(t, x1, y1, srgb), f.x);
     return mix(top, bottom, f.y);
 }
 
@@ -141,20 +141,34 @@ fn shade(pixel: vec2<u32>) -> GSample {
     s.material = mid;
     if mid < frame.material_count {
         let m = materials[mid];
+        let count = arrayLength(&texels);
+        let uv = vec2<f32>(uvs[2u * i0], uvs[2u * i0 + 1u]) * bary.x
+            + vec2<f32>(uvs[2u * i1], uvs[2u * i1 + 1u]) * bary.y
+            + vec2<f32>(uvs[2u * i2], uvs[2u * i2 + 1u]) * bary.z;
+        let uv_ok = all(abs(uv) < vec2<f32>(1e6));
         var base = m.base_color.rgb;
-        if (m.flags & MATERIAL_TEXTURED) != 0u && texture_fits(m, arrayLength(&texels)) {
-            let uv = vec2<f32>(uvs[2u * i0], uvs[2u * i0 + 1u]) * bary.x
-                + vec2<f32>(uvs[2u * i1], uvs[2u * i1 + 1u]) * bary.y
-                + vec2<f32>(uvs[2u * i2], uvs[2u * i2 + 1u]) * bary.z;
-            if all(abs(uv) < vec2<f32>(1e6)) {
-                base *= sample_texture(m, uv);
-            }
+        if uv_ok && uses_texture(m, MATERIAL_TEXTURED, base_texture(m), count) {
+            base *= sample_texture(base_texture(m), uv, true);
+        }
+        var emissive = m.emissive;
+        if uv_ok && uses_texture(m, MATERIAL_EMISSIVE_TEXTURED, emissive_texture(m), count) {
+            emissive *= sample_texture(emissive_texture(m), uv, true);
+        }
+        var roughness = unit(m.roughness);
+        var metallic = unit(m.metallic);
+        var reflectivity = unit(m.reflectivity);
+        if uv_ok && uses_texture(m, MATERIAL_METALLIC_ROUGHNESS_TEXTURED, metallic_roughness_texture(m), count) {
+            let mr = sample_texture(metallic_roughness_texture(m), uv, false);
+            roughness = unit(roughness * mr.g);
+            metallic = unit(metallic * mr.b);
+            // The glTF rule the loader applies to the factors, per texel.
+            reflectivity = metallic * (1.0 - roughness);
         }
         s.base_color = bounded(base, 1.0);
-        s.roughness = unit(m.roughness);
-        s.metallic = unit(m.metallic);
-        s.reflectivity = unit(m.reflectivity);
-        s.emissive = bounded(m.emissive, MAX_RADIANCE);
+        s.roughness = roughness;
+        s.metallic = metallic;
+        s.reflectivity = reflectivity;
+        s.emissive = bounded(emissive, MAX_RADIANCE);
     }
     // Motion: where this point was on screen in the previous frame (static geometry).
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(world, 1.0));

@@ -11,12 +11,16 @@ fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
-fn texel(t: &Texture, x: u32, y: u32) -> Vec3 {
+fn texel(t: &Texture, x: u32, y: u32, srgb: bool) -> Vec3 {
     let i = ((y * t.width + x) * 4) as usize;
-    Vec3::from_array(std::array::from_fn(|k| srgb_to_linear(f32::from(t.rgba8[i + k]) / 255.0)))
+    Vec3::from_array(std::array::from_fn(|k| {
+        let c = f32::from(t.rgba8[i + k]) / 255.0;
+        if srgb { srgb_to_linear(c) } else { c }
+    }))
 }
 
-pub(crate) fn sample_texture(t: &Texture, uv: Vec2) -> Vec3 {
+/// As `sample_texture`: bilinear, repeating; sRGB texels decoded before they are filtered.
+pub(crate) fn sample_texture(t: &Texture, uv: Vec2, srgb: bool) -> Vec3 {
     let size = Vec2::new(t.width as f32, t.height as f32);
     let p = uv.fract_gl() * size - 0.5;
     let f = p.fract_gl();
@@ -26,9 +30,52 @@ pub(crate) fn sample_texture(t: &Texture, uv: Vec2) -> Vec3 {
     let y0 = ((i0.y as i32 % h + h) % h) as u32;
     let x1 = (x0 + 1) % t.width;
     let y1 = (y0 + 1) % t.height;
-    let top = texel(t, x0, y0).lerp(texel(t, x1, y0), f.x);
-    let bottom = texel(t, x0, y1).lerp(texel(t, x1, y1), f.x);
+    let top = texel(t, x0, y0, srgb).lerp(texel(t, x1, y0, srgb), f.x);
+    let bottom = texel(t, x0, y1, srgb).lerp(texel(t, x1, y1, srgb), f.x);
     top.lerp(bottom, f.y)
+}
+
+/// What a material gives a surface point at texture coordinate `uv`: its factors times its
+/// textures, bounded (as the resolve does), the reflectivity taken per texel as
+/// metallic x (1 - roughness) where a metallic-roughness texture is given.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MaterialSample {
+    pub base_color: Vec3,
+    pub emissive: Vec3,
+    pub roughness: f32,
+    pub metallic: f32,
+    pub reflectivity: f32,
+}
+
+pub(crate) fn material_at(scene: &Scene, m: &Material, uv: Vec2) -> MaterialSample {
+    let texture = |t: Option<u32>| {
+        t.and_then(|t| scene.textures.get(t as usize))
+            .filter(|_| uv.abs().cmplt(Vec2::splat(1e6)).all())
+    };
+    let mut base = m.base_color.xyz();
+    if let Some(t) = texture(m.base_color_texture) {
+        base *= sample_texture(t, uv, true);
+    }
+    let mut emissive = m.emissive;
+    if let Some(t) = texture(m.emissive_texture) {
+        emissive *= sample_texture(t, uv, true);
+    }
+    let mut roughness = m.roughness.clamp(0.0, 1.0);
+    let mut metallic = m.metallic.clamp(0.0, 1.0);
+    let mut reflectivity = m.reflectivity.clamp(0.0, 1.0);
+    if let Some(t) = texture(m.metallic_roughness_texture) {
+        let mr = sample_texture(t, uv, false);
+        roughness = (roughness * mr.y).clamp(0.0, 1.0);
+        metallic = (metallic * mr.z).clamp(0.0, 1.0);
+        reflectivity = metallic * (1.0 - roughness);
+    }
+    MaterialSample {
+        base_color: base.clamp(Vec3::ZERO, Vec3::ONE),
+        emissive: emissive.max(Vec3::ZERO),
+        roughness,
+        metallic,
+        reflectivity,
+    }
 }
 
 /// The G-buffer sample of visibility word `word` at pixel (x, y).
@@ -90,19 +137,13 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
     let mid = scene.triangle_materials[id as usize];
     let mut s = GSample { depth: d, normal: n, material: mid, ..GSample::default() };
     if let Some(m) = scene.materials.get(mid as usize) {
-        let Material { base_color, base_color_texture, .. } = m;
-        let mut base = base_color.xyz();
-        if let Some(t) = base_color_texture.and_then(|t| scene.textures.get(t as usize)) {
-            let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
-            if uv.abs().cmplt(Vec2::splat(1e6)).all() {
-                base *= sample_texture(t, uv);
-            }
-        }
-        s.base_color = base.clamp(Vec3::ZERO, Vec3::ONE);
-        s.roughness = m.roughness.clamp(0.0, 1.0);
-        s.metallic = m.metallic.clamp(0.0, 1.0);
-        s.reflectivity = m.reflectivity.clamp(0.0, 1.0);
-        s.emissive = m.emissive.max(Vec3::ZERO);
+        let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
+        let at = material_at(scene, m, uv);
+        s.base_color = at.base_color;
+        s.roughness = at.roughness;
+        s.metallic = at.metallic;
+        s.reflectivity = at.reflectivity;
+        s.emissive = at.emissive;
     }
     let pc = mat_mul(&f.prev_view_proj, world.extend(1.0).to_array());
     if pc.w > 1e-20 {

@@ -88,7 +88,13 @@ mirrored!(
         flags,
         texture_offset,
         texture_width,
-        texture_height
+        texture_height,
+        emissive_offset,
+        emissive_width,
+        emissive_height,
+        metallic_roughness_offset,
+        metallic_roughness_width,
+        metallic_roughness_height
     ]
 );
 mirrored!(

@@ -1,6 +1,8 @@
 //! glTF 2.0 (`.gltf` and `.glb`, via the `gltf` crate): node transforms, every mesh and
-//! primitive, metallic-roughness materials with base-colour textures, `KHR_lights_punctual`,
-//! `KHR_materials_emissive_strength` and the first camera.
+//! primitive, metallic-roughness materials with their base-colour, emissive and
+//! metallic-roughness textures (texture coordinate set 0, repeating, bilinear),
+//! `KHR_lights_punctual`, `KHR_materials_emissive_strength` and the first camera. Normal and
+//! occlusion textures, other coordinate sets and alpha modes are named in one warning.
 //!
 //! Mirror reflectivity, which glTF does not have, is derived as `metallic * (1 - roughness)`.
 
@@ -68,27 +70,62 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
         .collect();
     let mut image_textures: Vec<Option<u32>> = vec![None; doc.images().len()];
     let mut texels_left = limits.texels;
+    // Material features the renderer does not read, with how many materials use each.
+    let mut unread: std::collections::BTreeMap<&str, usize> = Default::default();
+    for m in doc.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let slots = [
+            ("a normal texture", m.normal_texture().is_some()),
+            ("an occlusion texture", m.occlusion_texture().is_some()),
+            (
+                "a second texture coordinate set",
+                [
+                    pbr.base_color_texture().map(|t| t.tex_coord()),
+                    pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
+                    m.emissive_texture().map(|t| t.tex_coord()),
+                ]
+                .into_iter()
+                .flatten()
+                .any(|set| set != 0),
+            ),
+            ("alpha blending or masking", m.alpha_mode() != gltf::material::AlphaMode::Opaque),
+        ];
+        for (what, used) in slots {
+            if used {
+                *unread.entry(what).or_default() += 1;
+            }
+        }
+    }
+    if !unread.is_empty() {
+        let list: Vec<String> = unread.iter().map(|(w, n)| format!("{w} ({n})")).collect();
+        scene.warnings.push(format!(
+            "materials use what the renderer does not read (rendered without it): {}",
+            list.join(", ")
+        ));
+    }
     for m in doc.materials() {
         let name =
             m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_owned);
         let pbr = m.pbr_metallic_roughness();
-        let texture =
-            pbr.base_color_texture().filter(|_| m.index().is_some_and(|i| used.contains(&i)));
-        let base_color_texture = match texture {
-            Some(info) => {
-                let image = info.texture().source();
-                let i = image.index();
-                if image_textures[i].is_none() {
-                    let at = format!("images[{i}]");
-                    let tex = load_image(path, &image, &buffers, &mut texels_left)
-                        .map_err(|m| Error::format(path, &at, m))?;
-                    scene.textures.push(tex);
-                    image_textures[i] = Some(scene.textures.len() as u32 - 1);
-                }
-                image_textures[i]
+        let in_use = m.index().is_some_and(|i| used.contains(&i));
+        // Each image is decoded once, whichever slots and materials use it.
+        let mut texture = |info: Option<gltf::texture::Texture<'_>>| -> Result<Option<u32>> {
+            let Some(texture) = info.filter(|_| in_use) else { return Ok(None) };
+            let image = texture.source();
+            let i = image.index();
+            if image_textures[i].is_none() {
+                let at = format!("images[{i}]");
+                let tex = load_image(path, &image, &buffers, &mut texels_left)
+                    .map_err(|m| Error::format(path, &at, m))?;
+                scene.textures.push(tex);
+                image_textures[i] = Some(scene.textures.len() as u32 - 1);
             }
-            None => None,
+            Ok(image_textures[i])
         };
+        let base_color_texture = texture(pbr.base_color_texture().map(|t| t.texture()))?;
+        let emissive_texture = texture(m.emissive_texture().map(|t| t.texture()))?;
+        let metallic_roughness_texture =
+            texture(pbr.metallic_roughness_texture().map(|t| t.texture()))?;
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
         let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
         scene.materials.push(Material {
@@ -96,8 +133,10 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
             base_color: Vec4::from(pbr.base_color_factor()),
             base_color_texture,
             emissive: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            emissive_texture,
             roughness,
             metallic,
+            metallic_roughness_texture,
             reflectivity: metallic * (1.0 - roughness),
             double_sided: m.double_sided(),
         });

@@ -15,7 +15,8 @@ pub struct SceneInfo {
     pub lights: Vec<Light>,
     /// Ambient (sky) radiance, linear rgb.
     pub ambient: Vec3,
-    /// Some material has a mirror reflectivity above zero.
+    /// Some material may reflect: a reflectivity above zero, or a metallic-roughness texture
+    /// on a metallic factor above zero (its reflectivity is per texel).
     pub reflective: bool,
     /// Some material emits light.
     pub emissive: bool,
@@ -30,7 +31,9 @@ impl SceneInfo {
         SceneInfo {
             lights: scene.lights.clone(),
             ambient: scene.ambient,
-            reflective: scene.materials.iter().any(|m| m.reflectivity > 0.0),
+            reflective: scene.materials.iter().any(|m| {
+                m.reflectivity > 0.0 || (m.metallic_roughness_texture.is_some() && m.metallic > 0.0)
+            }),
             emissive: scene.materials.iter().any(|m| m.emissive.max_element() > 0.0),
             bounds: scene.bounds(),
         }

@@ -32,6 +32,13 @@ pub struct Material {
     pub base_color_texture: Option<u32>,
     /// Emitted radiance, linear rgb.
     pub emissive: Vec3,
+    /// Index into [`Scene::textures`] of the emissive texture (sRGB encoded; multiplies
+    /// `emissive`), if any.
+    pub emissive_texture: Option<u32>,
+    /// Index into [`Scene::textures`] of the metallic-roughness texture (linear; green
+    /// multiplies `roughness`, blue `metallic`), if any. With one, the reflectivity is taken
+    /// per texel as metallic x (1 - roughness), the rule glTF materials follow.
+    pub metallic_roughness_texture: Option<u32>,
     /// Perceptual roughness in [0, 1].
     pub roughness: f32,
     /// Metalness in [0, 1].
@@ -134,6 +141,8 @@ impl Default for Material {
             base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
             base_color_texture: None,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
+            metallic_roughness_texture: None,
             roughness: 0.8,
             metallic: 0.0,
             reflectivity: 0.0,
@@ -458,8 +467,9 @@ impl Scene {
         }
         for m in &self.materials {
             m.validate()?;
-            if let Some(t) = m.base_color_texture
-                && t as usize >= self.textures.len()
+            let textures = [m.base_color_texture, m.emissive_texture, m.metallic_roughness_texture];
+            if let Some(t) =
+                textures.into_iter().flatten().find(|&t| t as usize >= self.textures.len())
             {
                 return Err(Error::InvalidScene(format!(
                     "material `{}` uses texture {t} but there are {} textures",

@@ -161,6 +161,8 @@ fn convert_material(
         name: m.name.clone(),
         base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
         base_color_texture,
+        emissive_texture: None,
+        metallic_roughness_texture: None,
         emissive: Vec3::from(ke),
         roughness,
         metallic: 0.0,

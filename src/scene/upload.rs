@@ -33,7 +33,8 @@ pub struct GpuMaterial {
     pub metallic: f32,
     /// Mirror reflectivity.
     pub reflectivity: f32,
-    /// Bit 0: double-sided; bit 1: textured.
+    /// Bit 0: double-sided; bit 1: base-colour texture; bit 2: emissive texture; bit 3:
+    /// metallic-roughness texture.
     pub flags: u32,
     /// First texel of the base-colour texture in the texel buffer.
     pub texture_offset: u32,
@@ -41,16 +42,33 @@ pub struct GpuMaterial {
     pub texture_width: u32,
     /// Texture height.
     pub texture_height: u32,
+    /// First texel of the emissive texture (sRGB; multiplies `emissive`).
+    pub emissive_offset: u32,
+    /// Emissive texture width.
+    pub emissive_width: u32,
+    /// Emissive texture height.
+    pub emissive_height: u32,
+    /// First texel of the metallic-roughness texture (linear; green: roughness, blue:
+    /// metallic; the reflectivity becomes metallic x (1 - roughness) per texel).
+    pub metallic_roughness_offset: u32,
+    /// Metallic-roughness texture width.
+    pub metallic_roughness_width: u32,
+    /// Metallic-roughness texture height.
+    pub metallic_roughness_height: u32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);
 
 /// [`GpuMaterial::flags`] bit: both faces visible.
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
 /// [`GpuMaterial::flags`] bit: has a base-colour texture.
 pub const MATERIAL_TEXTURED: u32 = 2;
+/// [`GpuMaterial::flags`] bit: has an emissive texture.
+pub const MATERIAL_EMISSIVE_TEXTURED: u32 = 4;
+/// [`GpuMaterial::flags`] bit: has a metallic-roughness texture.
+pub const MATERIAL_METALLIC_ROUGHNESS_TEXTURED: u32 = 8;
 
 /// The host engine's own buffers, for [`SceneBuffers::import`]. Each needs `STORAGE` usage and
 /// the byte layout in this module's documentation.
@@ -101,7 +119,15 @@ impl SceneBuffers {
         scene.validate()?;
         SceneInfo::of(scene).validate()?;
         let limits = device.limits();
+        // Every texture once, however many materials and slots use it.
         let mut texels: Vec<u32> = Vec::new();
+        let mut placed = Vec::with_capacity(scene.textures.len());
+        for tex in &scene.textures {
+            placed.push((texels.len() as u32, tex.width, tex.height));
+            texels.extend(
+                tex.rgba8.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            );
+        }
         let mut materials = Vec::with_capacity(scene.materials.len());
         for m in &scene.materials {
             let mut g = GpuMaterial {
@@ -114,14 +140,19 @@ impl SceneBuffers {
                 ..GpuMaterial::default()
             };
             if let Some(t) = m.base_color_texture {
-                let tex = &scene.textures[t as usize];
                 g.flags |= MATERIAL_TEXTURED;
-                g.texture_offset = texels.len() as u32;
-                g.texture_width = tex.width;
-                g.texture_height = tex.height;
-                texels.extend(
-                    tex.rgba8.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
-                );
+                (g.texture_offset, g.texture_width, g.texture_height) = placed[t as usize];
+            }
+            if let Some(t) = m.emissive_texture {
+                g.flags |= MATERIAL_EMISSIVE_TEXTURED;
+                (g.emissive_offset, g.emissive_width, g.emissive_height) = placed[t as usize];
+            }
+            if let Some(t) = m.metallic_roughness_texture {
+                g.flags |= MATERIAL_METALLIC_ROUGHNESS_TEXTURED;
+                let (offset, width, height) = placed[t as usize];
+                g.metallic_roughness_offset = offset;
+                g.metallic_roughness_width = width;
+                g.metallic_roughness_height = height;
             }
             materials.push(g);
         }

@@ -334,21 +334,16 @@ impl Tracer {
                 reflectivity: 0.0,
             };
         };
-        let mut albedo = material.base_color.xyz();
-        if let Some(t) = material.base_color_texture.and_then(|t| scene.textures.get(t as usize)) {
-            let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
-            albedo *= crate::cpu::resolve::sample_texture(t, uv);
-        }
-        let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
-        let metallic = material.metallic.clamp(0.0, 1.0);
+        let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
+        let at = crate::cpu::resolve::material_at(scene, material, uv);
         Surface {
             normal,
-            diffuse: albedo * (1.0 - metallic),
-            emission: material.emissive.max(Vec3::ZERO),
-            base_color: albedo,
-            roughness: material.roughness.clamp(0.0, 1.0),
-            metallic,
-            reflectivity: material.reflectivity.clamp(0.0, 1.0),
+            diffuse: at.base_color * (1.0 - at.metallic),
+            emission: at.emissive,
+            base_color: at.base_color,
+            roughness: at.roughness,
+            metallic: at.metallic,
+            reflectivity: at.reflectivity,
         }
     }
 
