@@ -192,13 +192,7 @@ struct TruthArgs {
     frames: u32,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
     #[command(flatten)]
-    ao: AoArgs,
-    /// The GPU estimate's radiosity (with --compare).
-    #[command(flatten)]
-    radiosity: RadiosityArgs,
-    /// The GPU estimate's reflections (with --compare).
-    #[command(flatten)]
-    reflections: ReflectionArgs,
+    estimators: EffectArgs,
     /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
     #[arg(long)]
     compare: bool,
@@ -269,6 +263,27 @@ impl RadiosityArgs {
         r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
+    }
+}
+
+/// The settings of the obscurance, the radiosity and the reflections (render, and truth's GPU
+/// estimate); those not given keep the default's (or the preset's) value.
+#[derive(clap::Args)]
+struct EffectArgs {
+    #[command(flatten)]
+    ao: AoArgs,
+    #[command(flatten)]
+    radiosity: RadiosityArgs,
+    #[command(flatten)]
+    reflections: ReflectionArgs,
+}
+
+impl EffectArgs {
+    /// Sets what was given on `s`.
+    fn apply(&self, s: &mut Settings) {
+        self.ao.apply(&mut s.ao);
+        self.radiosity.apply(&mut s.radiosity);
+        self.reflections.apply(&mut s.reflections);
     }
 }
 
@@ -373,11 +388,7 @@ struct RenderArgs {
     #[arg(long)]
     no_ao: bool,
     #[command(flatten)]
-    ao: AoArgs,
-    #[command(flatten)]
-    radiosity: RadiosityArgs,
-    #[command(flatten)]
-    reflections: ReflectionArgs,
+    estimators: EffectArgs,
     /// How the spiral radiosity gather normalises its taps (cosine conserves energy; paper is
     /// 2 pi / M).
     #[arg(long, value_enum, default_value_t = Normalization::Cosine)]
@@ -492,9 +503,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     // has their radius.
     let mut settings = scaled_defaults(&scene);
     (settings.width, settings.height) = (w, h);
-    args.ao.apply(&mut settings.ao);
-    args.radiosity.apply(&mut settings.radiosity);
-    args.reflections.apply(&mut settings.reflections);
+    args.estimators.apply(&mut settings);
     settings.validate()?;
     let ao = settings.ao.clone();
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
@@ -865,9 +874,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     if let Some(p) = args.precision {
         settings.precision = p;
     }
-    args.ao.apply(&mut settings.ao);
-    args.radiosity.apply(&mut settings.radiosity);
-    args.reflections.apply(&mut settings.reflections);
+    args.estimators.apply(&mut settings);
     settings.validate()?;
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
