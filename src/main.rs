@@ -295,7 +295,7 @@ struct ReflectionArgs {
     #[arg(long)]
     reflection_distance: Option<f32>,
     /// How far behind a surface a reflection ray may pass and still hit it, in scene units
-    /// [default: 0.1].
+    /// [default: 0.1 times the scene's scale].
     #[arg(long)]
     reflection_thickness: Option<f32>,
     /// Directions averaged over the glossy lobe of a surface of roughness 0.5 or more (fewer
@@ -1075,9 +1075,11 @@ fn private_runtime_dir() {
         use std::os::unix::fs::{DirBuilderExt, MetadataExt};
         let uid = std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(0);
         let dir = std::env::temp_dir().join(format!("deep-gbuffer-runtime-{uid}"));
-        let made = std::fs::DirBuilder::new().mode(0o700).create(&dir);
-        let ours = std::fs::metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
-        if (made.is_ok() || ours) && std::fs::metadata(&dir).is_ok_and(|m| m.mode() & 0o077 == 0) {
+        // Made now or by an earlier run; used only while it is ours and private.
+        let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        let private = std::fs::symlink_metadata(&dir)
+            .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.mode() & 0o077 == 0);
+        if private {
             // SAFETY: called first thing in `main`, before any thread is started, so nothing
             // reads the environment concurrently.
             unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };

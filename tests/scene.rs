@@ -545,4 +545,14 @@ fn a_fitted_camera_sees_the_whole_scene() {
         assert_eq!(fov(&fitted), fov(&own), "the field of view stays");
         fitted.validate().unwrap();
     }
+    // An orthographic camera widens its view instead of moving.
+    let ortho = deep_gbuffer::Camera {
+        projection: deep_gbuffer::Projection::Orthographic { height: 1.0, near: 0.1, far: 10.0 },
+        ..own.clone()
+    };
+    for aspect in [16.0 / 9.0, 0.5] {
+        let fitted = scene.fit_camera(&ortho, aspect);
+        assert!(inside(&fitted, aspect), "orthographic, aspect {aspect}");
+        fitted.validate().unwrap();
+    }
 }

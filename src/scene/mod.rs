@@ -335,20 +335,11 @@ impl Scene {
         self.bounds().map_or(0.0, |(lo, hi)| (hi - lo).max_element())
     }
 
-    /// A camera looking at the scene's bounds from the front (+z), slightly above.
+    /// A camera looking at the scene's bounds from the front (+z), slightly above, with a 45
+    /// degree field of view, fitted to them ([`fit_camera`](Scene::fit_camera)).
     pub fn framing_camera(&self) -> Camera {
-        let (lo, hi) = self.bounds().unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
-        let center = (lo + hi) * 0.5;
-        let radius = ((hi - lo).length() * 0.5).max(1e-3);
-        let fov_y: f32 = 45.0;
-        let dist = radius / (fov_y.to_radians() * 0.5).sin();
         let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
-        Camera::perspective(
-            center + dir * dist,
-            center,
-            fov_y,
-            (dist - radius).max(dist * 1e-3) * 0.5,
-        )
+        self.fit_camera(&Camera::perspective(dir, Vec3::ZERO, 45.0, 0.1), 1.0)
     }
 
     /// A near plane for a camera at `eye` that cuts nothing of the scene: half the distance from
