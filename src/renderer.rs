@@ -268,10 +268,13 @@ impl Renderer {
         wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
     }
 
-    /// Features used when present: 64-bit atomics (one raster pass instead of two) and
-    /// timestamp queries (per-pass GPU timings).
+    /// Features used when present: 64-bit atomics (one raster pass instead of two; with
+    /// `SHADER_INT64_ATOMIC_ALL_OPS` also the raster's early depth test, which loads a word before
+    /// its atomic) and timestamp queries (per-pass GPU timings).
     pub fn optional_features() -> wgpu::Features {
-        Self::int64_features() | wgpu::Features::TIMESTAMP_QUERY
+        Self::int64_features()
+            | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS
+            | wgpu::Features::TIMESTAMP_QUERY
     }
 
     /// Limits deep-gbuffer needs beyond the WebGPU defaults: 12 storage buffers per stage. Raise

@@ -113,6 +113,34 @@ fn random_soups_match_cpu_reference() {
     }
 }
 
+/// Triangles larger than the work items can split: 600 screen-covering triangles at 512x384
+/// (768 tiles: 12 workgroups each at 64 tiles a workgroup, 96 at 8) ask for at least 6600
+/// work items, more than the 4696 there is room for, so many are drawn by one workgroup each.
+/// The result must not change.
+#[test]
+fn screen_covering_layers_past_the_work_items_match_cpu_reference() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let triangles: Vec<[Vec3; 3]> = (0..600)
+        .map(|_| {
+            let z = rng.random_range(-2.0..0.0);
+            let tilt = rng.random_range(-0.3..0.3);
+            [
+                Vec3::new(-8.0, -6.0, z),
+                Vec3::new(8.0, -6.0, z + tilt),
+                Vec3::new(0.0, 9.0, z - tilt),
+            ]
+        })
+        .collect();
+    let camera = Camera::perspective(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 60.0, 0.05);
+    let scene = soup(&triangles, false);
+    let settings = Settings { dz: 0.01, ..settings(512, 384) };
+    assert_matches_cpu(&scene, &camera, settings.clone());
+    let r = render(&scene, &camera, settings);
+    let d = r.renderer.diagnostics(&gpu().device, &gpu().queue).unwrap();
+    assert!(d.large_triangles >= 600, "{d:?}");
+    assert_eq!(d.dropped_triangles, 0);
+}
+
 /// A w x h grid of quads on the plane z = `z`, spanning [lo, hi] in x and y.
 fn grid(n: usize, lo: f32, hi: f32, z: f32, jitter: f32, seed: u64) -> Scene {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

@@ -1,17 +1,22 @@
 // Software rasterization of both deep G-buffer layers into visibility buffers.
-// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 DEPTH_PHASE COUNT
+// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 EARLY_TEST DEPTH_PHASE COUNT
 //
 // raster_small: one thread per input triangle: transform, clip against the near plane and the
 //   guard band (in homogeneous space), snap to 1/256-pixel fixed point, cull back faces, then
-//   rasterize triangles whose extent is at most SMALL_EXTENT pixels right here, and append the
-//   others to one of two bins by the number of 16x16 tiles their bounds cover: up to
-//   MEDIUM_TILES tiles (bin 0), more (bin 1).
-// bin_args: turns the bins' counts into indirect dispatch arguments.
-// raster_large: one 16x16 workgroup per (binned triangle, slice), one pixel per thread. Bin 0
-//   has one slice per triangle, walking its few tiles; in bin 1 a triangle has one slice per
-//   TILES_PER_SLICE tiles (at most LARGE_SLICES) that share its tiles, so a screen-filling
-//   triangle costs about its pixels, spread over many workgroups, and a slice without tiles
-//   returns before any work.
+//   rasterize triangles whose extent is at most SMALL_EXTENT pixels right here, and bin the
+//   others: their set-up (snapped vertices, depth terms) is stored once in `large`, with one
+//   slice per TILES_PER_SLICE of the 16x16 tiles their bounds cover. Slice 0 of entry e is
+//   implicit; slices 1.. are work items appended to `items`.
+// bin_args: turns the counts into indirect dispatch arguments: one workgroup per entry and one
+//   per work item.
+// raster_large: one 16x16 workgroup per (binned triangle, slice), one pixel per thread; slice i
+//   of n walks the triangle's tiles i, i + n, ... So a triangle's workgroups follow its size
+//   (a screen-filling triangle costs about its pixels, spread over many workgroups), and no
+//   thread repeats the set-up.
+//
+// The early depth test: a fragment first reads the word it would lower and skips the atomic when
+// it cannot win (words only decrease, so the result is the same). It needs a plain atomic load:
+// always there on the 32-bit path, with EARLY_TEST (64-bit atomic loads) on the 64-bit one.
 //
 // Coverage is exact: pixel centres are tested with integer edge functions (exact 64-bit for
 // large triangles) and the top-left rule, so adjacent triangles neither crack nor overlap.
@@ -29,11 +34,14 @@
 #include "shared/vis.wgsl"
 
 const SUBPIXEL: i32 = 256;
-const SMALL_EXTENT: i32 = 16;
-const MEDIUM_TILES: u32 = 8u;
-// A bin-1 triangle gets one slice per TILES_PER_SLICE tiles, at most LARGE_SLICES.
-const TILES_PER_SLICE: u32 = 8u;
-const LARGE_SLICES: u32 = 32u;
+// Triangles at most SMALL_EXTENT pixels across are drawn by their own thread (at most 64: the
+// edge functions of that path are i32). Drawn by one thread, a triangle's pixels run one after
+// the other; binned, they take a workgroup: few pixels on a wide GPU, more on a CPU driver.
+override SMALL_EXTENT: i32 = 16;
+// A binned triangle gets one slice (workgroup) per TILES_PER_SLICE tiles of its bounds.
+override TILES_PER_SLICE: u32 = 8u;
+// A work item whose slot was reserved but not written (its triangle fell back to one slice).
+const NO_ITEM: u32 = 0xffffffffu;
 const MAX_POLY: u32 = 9u;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -41,14 +49,25 @@ const MAX_POLY: u32 = 9u;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 @group(0) @binding(3) var<storage, read> tri_materials: array<u32>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
-// Bin b (0 or 1) keeps at [4b] the triangles binned since the last bin_args and at [4b + 2] the
-// entries of the current raster_large dispatch; [1]: triangles dropped for lack of room,
+// [0]: triangles binned since the last bin_args, [2]: entries of the current raster_large
+// dispatch, [4] and [6]: the same for work items; [1]: triangles dropped for lack of room,
 // [3]: binned triangles this frame; [DIAG_*]: triangles rejected (or drawn untextured) for bad
 // input, counted by the camera's layer-0 raster only (frame.flags & FRAME_DIAGNOSTICS).
 @group(0) @binding(5) var<storage, read_write> bins: array<atomic<u32>>;
-// Bin b holds its entries at [b * capacity, (b + 1) * capacity), capacity = length / 2. An entry
-// is (triangle << 3 | clipped sub-triangle, tile count).
-@group(0) @binding(6) var<storage, read_write> large: array<vec2<u32>>;
+// A binned (clipped sub-)triangle, set up.
+struct Binned {
+    v0: vec2<i32>,
+    v1: vec2<i32>,
+    v2: vec2<i32>,
+    triangle: u32,
+    // Workgroups drawing it.
+    slices: u32,
+    r: vec3<f32>,
+    q: vec3<f32>,
+}
+@group(0) @binding(6) var<storage, read_write> large: array<Binned>;
+// Slices 1.. of binned triangles: (entry, slice), or (NO_ITEM, 0).
+@group(0) @binding(13) var<storage, read_write> items: array<vec2<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 #if WRITE_L0
 @group(0) @binding(8) var<storage, read_write> vis0: array<VisWord>;
@@ -208,17 +227,22 @@ fn setup(t: u32, poly: ptr<function, array<ClipVertex, MAX_POLY>>, k: u32) -> Se
     }
     s.q = vec3<f32>(1.0 / c0.z, 1.0 / c1.z, 1.0 / c2.z);
     s.r = vec3<f32>(c0.w, c1.w, c2.w) * s.q;
-    let mn = min(min(s.v0, s.v1), s.v2);
-    let mx = max(max(s.v0, s.v1), s.v2);
-    // First and last pixel whose centre (i * 256 + 128) lies in [mn, mx].
-    s.lo = max((mn - vec2<i32>(SUBPIXEL / 2) + vec2<i32>(SUBPIXEL - 1)) >> vec2<u32>(8u), vec2<i32>(0));
-    s.hi = min((mx - vec2<i32>(SUBPIXEL / 2)) >> vec2<u32>(8u), vec2<i32>(i32(frame.width) - 1, i32(frame.height) - 1));
+    bound(&s);
     if any(s.lo > s.hi) {
         return s;
     }
-    let extent = mx - mn;
+    let extent = max(max(s.v0, s.v1), s.v2) - min(min(s.v0, s.v1), s.v2);
     s.kind = select(2u, 1u, extent.x <= SMALL_EXTENT * SUBPIXEL && extent.y <= SMALL_EXTENT * SUBPIXEL);
     return s;
+}
+
+// The pixel range of s's vertices: the first and last pixel whose centre (i * 256 + 128) lies
+// in their bounds, clamped to the viewport.
+fn bound(s: ptr<function, Setup>) {
+    let mn = min(min((*s).v0, (*s).v1), (*s).v2);
+    let mx = max(max((*s).v0, (*s).v1), (*s).v2);
+    (*s).lo = max((mn - vec2<i32>(SUBPIXEL / 2) + vec2<i32>(SUBPIXEL - 1)) >> vec2<u32>(8u), vec2<i32>(0));
+    (*s).hi = min((mx - vec2<i32>(SUBPIXEL / 2)) >> vec2<u32>(8u), vec2<i32>(i32(frame.width) - 1, i32(frame.height) - 1));
 }
 
 // Top-left rule for an edge a -> b of a triangle with positive area (pixel space, y down).
@@ -358,45 +382,59 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         if s.kind == 1u {
             raster_small_triangle(s, t);
         } else if s.kind == 2u {
-            let tiles = (s.hi - s.lo) / 16 + 1;
-            let tile_count = u32(tiles.x * tiles.y);
-            let bin = select(0u, 1u, tile_count > MEDIUM_TILES);
-            let capacity = arrayLength(&large) / 2u;
-            let slot = atomicAdd(&bins[4u * bin], 1u);
-            if slot < capacity {
-                large[bin * capacity + slot] = vec2<u32>((t << 3u) | k, tile_count);
-            } else {
-                atomicAdd(&bins[1], 1u);
-            }
+            bin_triangle(s, t);
         }
     }
 }
 
+// Stores s's set-up in `large` and appends its slices past the first to `items`. Without room
+// for its slices the triangle is drawn by one workgroup (slower, never lost); without room for
+// its entry it is dropped and counted.
+fn bin_triangle(s: Setup, t: u32) {
+    let entry = atomicAdd(&bins[0], 1u);
+    if entry >= arrayLength(&large) {
+        atomicAdd(&bins[1], 1u);
+        return;
+    }
+    let tiles = (s.hi - s.lo) / 16 + 1;
+    var slices = (u32(tiles.x * tiles.y) + TILES_PER_SLICE - 1u) / TILES_PER_SLICE;
+    if slices > 1u {
+        let room = arrayLength(&items);
+        let base = atomicAdd(&bins[4], slices - 1u);
+        let fits = base < room && slices - 1u <= room - base;
+        for (var i = 1u; i < slices && base + i - 1u < room; i++) {
+            items[base + i - 1u] = select(vec2<u32>(NO_ITEM, 0u), vec2<u32>(entry, i), fits);
+        }
+        if !fits {
+            slices = 1u;
+        }
+    }
+    large[entry] = Binned(s.v0, s.v1, s.v2, t, slices, s.r, s.q);
+}
+
 @compute @workgroup_size(1)
 fn bin_args() {
-    for (var bin = 0u; bin < 2u; bin++) {
-        let binned = atomicExchange(&bins[4u * bin], 0u);
-        let count = min(binned, arrayLength(&large) / 2u);
-        atomicStore(&bins[4u * bin + 2u], count);
-        atomicAdd(&bins[3], binned);
-        args[4u * bin] = min(count, 65535u);
-        args[4u * bin + 1u] = (count + 65534u) / 65535u;
-        args[4u * bin + 2u] = select(1u, LARGE_SLICES, bin == 1u);
-    }
+    let binned = atomicExchange(&bins[0], 0u);
+    let entries = min(binned, arrayLength(&large));
+    atomicStore(&bins[2], entries);
+    atomicAdd(&bins[3], binned);
+    let extra = min(atomicExchange(&bins[4], 0u), arrayLength(&items));
+    atomicStore(&bins[6], extra);
+    let groups = entries + extra;
+    args[0] = min(groups, 65535u);
+    args[1] = (groups + 65534u) / 65535u;
+    args[2] = 1u;
 }
 
 // Exact edge function of a -> b at point p (all in 1/256 pixels).
-fn edge_wide(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> vec2<u32> {
+fn edge_wide(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> Wide {
     return wide_sub(wide_mul(b.x - a.x, p.y - a.y), wide_mul(b.y - a.y, p.x - a.x));
 }
 
-fn covers_wide(e: vec2<u32>, top_left_edge: bool) -> bool {
+fn covers_wide(e: Wide, top_left_edge: bool) -> bool {
     let s = wide_sign(e);
     return s > 0 || (s == 0 && top_left_edge);
 }
-
-// Which bin a raster_large dispatch reads: 0 or 1.
-override BIN: u32 = 0u;
 
 // Whether every pixel centre of the tile [lo, hi] (pixels) lies strictly outside edge a -> b.
 // Decided in f32 at the corner where the edge function is largest, with a margin far above the
@@ -415,35 +453,35 @@ fn tile_outside(s: Setup, lo: vec2<i32>, hi: vec2<i32>) -> bool {
     return tile_outside_edge(s.v1, s.v2, lo, hi) || tile_outside_edge(s.v2, s.v0, lo, hi) || tile_outside_edge(s.v0, s.v1, lo, hi);
 }
 
-// Every thread sets the triangle up itself: a little redundant arithmetic instead of a
-// workgroup barrier, which costs more on many devices (and far more on CPU drivers).
 @compute @workgroup_size(16, 16)
 fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
-    let entry = wid.x + wid.y * 65535u;
-    if entry >= atomicLoad(&bins[4u * BIN + 2u]) {
-        return;
+    let group = wid.x + wid.y * 65535u;
+    let entries = atomicLoad(&bins[2]);
+    var entry = group;
+    var slice = 0u;
+    if group >= entries {
+        if group - entries >= atomicLoad(&bins[6]) {
+            return;
+        }
+        let item = items[group - entries];
+        entry = item.x;
+        slice = item.y;
+        if entry == NO_ITEM {
+            return;
+        }
     }
-    let e = large[BIN * (arrayLength(&large) / 2u) + entry];
-    // Slices beyond the triangle's own slice count have nothing to do: skip the set-up.
-    let slices = clamp((e.y + TILES_PER_SLICE - 1u) / TILES_PER_SLICE, 1u, LARGE_SLICES);
-    if wid.z >= slices {
-        return;
-    }
-    let t = e.x >> 3u;
-    let k = e.x & 7u;
-    var poly: array<ClipVertex, MAX_POLY>;
-    let count = clip_triangle(t, &poly);
-    if k + 2u >= count {
-        return;
-    }
-    let s = setup(t, &poly, k);
-    if s.kind != 2u {
-        return;
-    }
+    let b = large[entry];
+    var s: Setup;
+    s.v0 = b.v0;
+    s.v1 = b.v1;
+    s.v2 = b.v2;
+    s.r = b.r;
+    s.q = b.q;
+    bound(&s);
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
     let tiles = (s.hi - s.lo) / 16 + 1;
     let tile_count = u32(tiles.x * tiles.y);
-    for (var tile = wid.z; tile < tile_count; tile += slices) {
+    for (var tile = slice; tile < tile_count; tile += b.slices) {
         let tile_lo = s.lo + vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16;
         if tile_outside(s, tile_lo, min(tile_lo + 15, s.hi)) {
             continue;
@@ -456,7 +494,7 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
             let e2 = edge_wide(s.v0, s.v1, p);
             if covers_wide(e0, tl.x) && covers_wide(e1, tl.y) && covers_wide(e2, tl.z) {
                 let e = vec3<f32>(wide_to_f32(e0), wide_to_f32(e1), wide_to_f32(e2));
-                fragment(pixel, depth_at(e, s), t);
+                fragment(pixel, depth_at(e, s), b.triangle);
             }
         }
     }

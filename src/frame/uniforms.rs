@@ -323,26 +323,26 @@ pub struct FillParams {
 
 mirrored!(FillParams, "fill.wgsl", "FillParams", [value, count]);
 
-/// The raster's counter words (`bins` in `wgsl/raster.wgsl`, an `array<atomic<u32>>`): the two
+/// The raster's counter words (`bins` in `wgsl/raster.wgsl`, an `array<atomic<u32>>`): the
 /// bins' bookkeeping, then what the diagnostics report. The `DIAG_*` constants of the WGSL
 /// name the offsets of the `rejected_*` and `untextured` words; a test holds them equal.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct RasterCounters {
-    /// Bin 0: triangles binned since its last `bin_args`.
-    pub bin0_pending: u32,
-    /// Large triangles dropped because a bin was full.
+    /// Triangles binned since the last `bin_args`.
+    pub pending_entries: u32,
+    /// Large triangles dropped because the bin was full.
     pub dropped: u32,
-    /// Bin 0: entries of the current `raster_large` dispatch.
-    pub bin0_entries: u32,
+    /// Binned triangles of the current `raster_large` dispatch.
+    pub entries: u32,
     /// Triangles binned this frame, over every raster of the frame.
     pub binned: u32,
-    /// Bin 1: triangles binned since its last `bin_args`.
-    pub bin1_pending: u32,
+    /// Work items (slices past a binned triangle's first) since the last `bin_args`.
+    pub pending_items: u32,
     /// Unused.
     pub _unused0: u32,
-    /// Bin 1: entries of the current `raster_large` dispatch.
-    pub bin1_entries: u32,
+    /// Work items of the current `raster_large` dispatch.
+    pub items: u32,
     /// Unused.
     pub _unused1: u32,
     /// Triangles rejected for a vertex index past the vertex count (`DIAG_INDEX`).

@@ -4,6 +4,10 @@
 //! rasterized in place, large ones binned), `bin_args` (indirect arguments) and `raster_large`
 //! (indirect, 16x16 tiles). On the 32-bit path every step runs twice: a depth phase, then an id
 //! phase; on the 64-bit path once.
+//!
+//! A binned triangle's set-up is stored once (64 bytes, `Binned` in the shader) and read by every
+//! workgroup that draws it; it gets one workgroup per 8 of its 16x16 tiles, the first implied by
+//! its entry and the others listed as work items (8 bytes each).
 
 use super::fill::Fill;
 use super::{FrameContext, Recorder, Stage};
@@ -42,13 +46,22 @@ impl RasterMode {
     }
 }
 
-/// Bytes of the indirect arguments (two dispatches of 4 u32).
-const ARGS_BYTES: u64 = 32;
+/// Bytes of the indirect arguments (one dispatch of 4 u32).
+const ARGS_BYTES: u64 = 16;
 
-/// Bytes of the bin entries for `triangles` triangles: two bins, each with room for two
-/// clipped sub-triangles per triangle plus slack, 8 bytes an entry, within `limit`.
-fn bin_bytes(triangles: u32, limit: u64) -> u64 {
-    ((u64::from(triangles) * 2 + 1024) * 2 * 8).min(limit & !15)
+/// Bytes of a binned triangle's set-up (`Binned`).
+const ENTRY_BYTES: u64 = 64;
+
+/// Bytes of a work item (`items`: entry and slice).
+const ITEM_BYTES: u64 = 8;
+
+/// Binned triangles and work items with room for `triangles` triangles: one entry per triangle
+/// plus slack for clipped sub-triangles (only triangles over 16 pixels across are binned), as
+/// many work items, each within `limit` bytes.
+fn bin_sizes(triangles: u32, limit: u64) -> (u64, u64) {
+    let count = u64::from(triangles) + 4096;
+    let within = |size: u64| (count * size).min(limit / size * size);
+    (within(ENTRY_BYTES), within(ITEM_BYTES))
 }
 
 /// One raster step: the camera it draws with, what it writes, and the buffers it writes
@@ -76,13 +89,50 @@ impl<'a> Draw<'a> {
     }
 }
 
+/// How the rasterizer shares out its work, by the kind of device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Work {
+    /// Triangles at most this many pixels across are drawn by one thread each.
+    small_extent: u32,
+    /// A binned triangle gets one workgroup per this many of its 16x16 tiles.
+    tiles_per_slice: u32,
+}
+
+impl Work {
+    /// A GPU runs thousands of threads at once and starts a workgroup cheaply: small triangles
+    /// stay small (16 pixels) and a binned triangle is spread thin (8 tiles a workgroup). A CPU
+    /// driver runs a few threads, and each workgroup costs it about as much as drawing a few
+    /// tiles (lavapipe, 2 cores, 1920x1080: the Cornell box's layer 0 took 67 ms at 8 tiles a
+    /// workgroup, 41 at 64, 48 at 256; the 2CylinderEngine's 415 at (16, 8), 320 at (16, 64),
+    /// 185 at (64, 64)), so it gets fewer, larger ones.
+    fn for_device(device: &wgpu::Device) -> Work {
+        match device.adapter_info().device_type {
+            wgpu::DeviceType::Cpu => Work { small_extent: 64, tiles_per_slice: 64 },
+            _ => Work { small_extent: 16, tiles_per_slice: 8 },
+        }
+    }
+
+    fn constants(self) -> [(&'static str, f64); 2] {
+        [
+            ("SMALL_EXTENT", f64::from(self.small_extent)),
+            ("TILES_PER_SLICE", f64::from(self.tiles_per_slice)),
+        ]
+    }
+}
+
 /// The rasterizer: its atomic path, bins, counters and indirect arguments.
 pub(crate) struct Rasterizer {
     int64: bool,
+    work: Work,
+    /// The 64-bit path's early depth test (the device loads 64-bit atomics).
+    early_test: bool,
     /// Bin counters and diagnostics ([`RasterCounters`]).
     bins: wgpu::Buffer,
     args: wgpu::Buffer,
+    /// Binned triangles' set-up.
     large: wgpu::Buffer,
+    /// Work items: slices past the first of binned triangles.
+    items: wgpu::Buffer,
 }
 
 impl Rasterizer {
@@ -91,23 +141,30 @@ impl Rasterizer {
         let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
         Rasterizer {
             int64,
+            work: Work::for_device(device),
+            early_test: int64
+                && device.features().contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
             bins: storage(
                 "deep-gbuffer.raster.bins",
                 std::mem::size_of::<RasterCounters>() as u64,
                 wgpu::BufferUsages::empty(),
             ),
             args: storage("deep-gbuffer.raster.args", ARGS_BYTES, wgpu::BufferUsages::INDIRECT),
-            large: storage("deep-gbuffer.raster.large", 16, wgpu::BufferUsages::empty()),
+            large: storage("deep-gbuffer.raster.large", ENTRY_BYTES, wgpu::BufferUsages::empty()),
+            items: storage("deep-gbuffer.raster.items", ITEM_BYTES, wgpu::BufferUsages::empty()),
         }
     }
 
     /// Makes the bins large enough for `scene`.
     pub(crate) fn reserve(&mut self, device: &wgpu::Device, scene: &SceneBuffers) {
         let limit = device.limits().max_storage_buffer_binding_size;
-        let needed = bin_bytes(scene.triangle_count(), limit);
-        if self.large.size() < needed {
-            let usage = wgpu::BufferUsages::empty();
-            self.large = gpu::storage_buffer(device, "deep-gbuffer.raster.large", needed, usage);
+        let (entries, items) = bin_sizes(scene.triangle_count(), limit);
+        let usage = wgpu::BufferUsages::empty();
+        if self.large.size() < entries {
+            self.large = gpu::storage_buffer(device, "deep-gbuffer.raster.large", entries, usage);
+        }
+        if self.items.size() < items {
+            self.items = gpu::storage_buffer(device, "deep-gbuffer.raster.items", items, usage);
         }
     }
 
@@ -132,6 +189,7 @@ impl Rasterizer {
             (slot::MATERIALS, &b.materials),
             (slot::BINS, &self.bins),
             (slot::LARGE, &self.large),
+            (slot::ITEMS, &self.items),
             (slot::ARGS, &self.args),
             (slot::TEXELS, &b.texels),
         ];
@@ -147,23 +205,17 @@ impl Rasterizer {
             let mut defines = mode.defines();
             if self.int64 {
                 defines.push("INT64");
+                if self.early_test {
+                    defines.push("EARLY_TEST");
+                }
             } else if depth_phase {
                 defines.push("DEPTH_PHASE");
             }
-            let get = |entry, constants: &[(&'static str, f64)]| {
-                pipelines.get(device, "raster", entry, &defines, constants)
-            };
-            get("raster_small", &[]).dispatch(device, pass, &entries, groups);
-            get("bin_args", &[]).dispatch(device, pass, &entries, (1, 1));
-            for bin in [0u32, 1] {
-                get("raster_large", &[("BIN", f64::from(bin))]).dispatch_indirect(
-                    device,
-                    pass,
-                    &entries,
-                    &self.args,
-                    u64::from(bin) * 16,
-                );
-            }
+            let get =
+                |entry| pipelines.get(device, "raster", entry, &defines, &self.work.constants());
+            get("raster_small").dispatch(device, pass, &entries, groups);
+            get("bin_args").dispatch(device, pass, &entries, (1, 1));
+            get("raster_large").dispatch_indirect(device, pass, &entries, &self.args, 0);
         }
     }
 

@@ -105,8 +105,8 @@ pub struct SceneBuffers {
     pub(crate) lights: wgpu::Buffer,
 }
 
-/// Triangles above this count cannot be addressed by the large-triangle bin (3 bits per entry
-/// name the clipped sub-triangle).
+/// The most triangles a scene may have: the shaders address the index buffer (three u32 per
+/// triangle) with 32-bit indices.
 pub const MAX_TRIANGLES: u32 = 1 << 29;
 
 impl SceneBuffers {

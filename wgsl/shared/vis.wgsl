@@ -3,7 +3,9 @@
 // f32 view depth, positive, so its bits order like the value; the empty pixel is all ones.
 // With INT64 the word is updated by one 64-bit atomicMin; without it by two passes over 32-bit
 // atomics: DEPTH_PHASE takes the minimum depth, then the id phase the minimum id at that depth.
-// Both give the same words. WGSL cannot pass storage pointers to functions, so the writes name
+// Both give the same words. Each write first reads the word and leaves when it cannot lower it
+// (the early depth test; on the 64-bit path only with EARLY_TEST, which needs 64-bit atomic
+// loads): words only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage pointers to functions, so the writes name
 // the bindings `vis0` and `vis1` (declared under WRITE_L0 and WRITE_L1 by the including kernel).
 
 const VIS_EMPTY: u32 = 0xffffffffu;
@@ -16,12 +18,24 @@ fn vis_pack(depth: f32, id: u32) -> u64 {
 }
 #if WRITE_L0
 fn vis0_write(p: u32, depth: f32, id: u32) {
-    atomicMin(&vis0[p], vis_pack(depth, id));
+    let word = vis_pack(depth, id);
+#if EARLY_TEST
+    if atomicLoad(&vis0[p]) <= word {
+        return;
+    }
+#endif
+    atomicMin(&vis0[p], word);
 }
 #endif
 #if WRITE_L1
 fn vis1_write(p: u32, depth: f32, id: u32) {
-    atomicMin(&vis1[p], vis_pack(depth, id));
+    let word = vis_pack(depth, id);
+#if EARLY_TEST
+    if atomicLoad(&vis1[p]) <= word {
+        return;
+    }
+#endif
+    atomicMin(&vis1[p], word);
 }
 #endif
 #else
@@ -30,7 +44,9 @@ alias VisWord = atomic<u32>;
 #if WRITE_L0
 fn vis0_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
-    atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
+    if atomicLoad(&vis0[2u * p + 1u]) > bitcast<u32>(depth) {
+        atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
+    }
 #else
     if atomicLoad(&vis0[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis0[2u * p], id);
@@ -41,7 +57,9 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 #if WRITE_L1
 fn vis1_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
-    atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
+    if atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth) {
+        atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
+    }
 #else
     if atomicLoad(&vis1[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis1[2u * p], id);

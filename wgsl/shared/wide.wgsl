@@ -1,6 +1,30 @@
-// Exact 64-bit two's-complement integers as vec2<u32>(lo, hi), so that edge functions of large
-// triangles are exact on every device, with or without 64-bit shader arithmetic.
-// src/cpu/raster.rs computes the same values with i64.
+// Exact 64-bit integers for the edge functions of large triangles: with INT64 (the device has
+// 64-bit shader integers) native i64, otherwise two's complement as vec2<u32>(lo, hi), so that
+// they are exact on every device. src/cpu/raster.rs computes the same values with i64.
+
+#if INT64
+alias Wide = i64;
+
+fn wide_sub(a: i64, b: i64) -> i64 {
+    return a - b;
+}
+
+// The exact product of two i32 values.
+fn wide_mul(a: i32, b: i32) -> i64 {
+    return i64(a) * i64(b);
+}
+
+// -1, 0 or 1.
+fn wide_sign(a: i64) -> i32 {
+    return select(select(0, 1, a > 0li), -1, a < 0li);
+}
+
+// As the vec2<u32> form converts (high word, then low), so both give the same f32.
+fn wide_to_f32(a: i64) -> f32 {
+    return f32(i32(a >> 32u)) * 4294967296.0 + f32(u32(a & 0xffffffffli));
+}
+#else
+alias Wide = vec2<u32>;
 
 fn wide_neg(a: vec2<u32>) -> vec2<u32> {
     let lo = ~a.x + 1u;
@@ -38,3 +62,4 @@ fn wide_sign(a: vec2<u32>) -> i32 {
 fn wide_to_f32(a: vec2<u32>) -> f32 {
     return f32(bitcast<i32>(a.y)) * 4294967296.0 + f32(a.x);
 }
+#endif
