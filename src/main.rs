@@ -834,6 +834,8 @@ struct TimingsFile<'a> {
     /// Clipped triangles too large for one thread, rasterized by tiles.
     binned_triangles: u32,
     passes: Vec<deep_gbuffer::gpu::PassTiming>,
+    /// Shadow passes the frame did not run: their maps were kept from an earlier frame.
+    reused: Vec<String>,
     total_ms: f64,
 }
 
@@ -994,6 +996,10 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             binned_triangles: diagnostics.large_triangles,
             total_ms: passes.iter().map(|p| p.ms).sum(),
             passes,
+            reused: renderer
+                .last_plan()
+                .map(|p| p.reused.iter().map(|r| r.name().into_owned()).collect())
+                .unwrap_or_default(),
         };
         let json = serde_json::to_string_pretty(&file).expect("plain data serializes");
         output::write_bytes(path, json.as_bytes())?;

@@ -212,6 +212,11 @@ pub struct Plan {
     pub passes: Vec<PassId>,
     /// The effects that do not run, and why.
     pub left_out: Vec<(Effect, Reason)>,
+    /// Shadow passes this frame does not record because an earlier frame drew their maps and
+    /// nothing they depend on changed since (the light, the scene's buffers, the shadow
+    /// settings; see [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)). The
+    /// maps are still read: shadows run.
+    pub reused: Vec<PassId>,
 }
 
 impl Plan {
@@ -292,7 +297,13 @@ impl Plan {
             passes.push(PassId::Reflections);
         }
         passes.push(PassId::Composite);
-        Plan { layers, ao_two_layers: layers == 2 && settings.ao.two_layers, passes, left_out }
+        Plan {
+            layers,
+            ao_two_layers: layers == 2 && settings.ao.two_layers,
+            passes,
+            left_out,
+            reused: Vec::new(),
+        }
     }
 
     /// Whether `effect` runs.
@@ -310,12 +321,20 @@ impl Plan {
         self.passes.contains(pass)
     }
 
-    /// The lights that get shadow maps: index and name, in atlas order.
-    pub fn shadow_lights(&self) -> impl Iterator<Item = (usize, &str)> {
-        self.passes.iter().filter_map(|p| match p {
-            PassId::Shadow { light, name } => Some((*light, name.as_str())),
-            _ => None,
-        })
+    /// The lights that get shadow maps, drawn this frame or reused: index and name, in atlas
+    /// order.
+    pub fn shadow_lights(&self) -> Vec<(usize, &str)> {
+        let mut lights: Vec<(usize, &str)> = self
+            .passes
+            .iter()
+            .chain(&self.reused)
+            .filter_map(|p| match p {
+                PassId::Shadow { light, name } => Some((*light, name.as_str())),
+                _ => None,
+            })
+            .collect();
+        lights.sort_by_key(|&(light, _)| light);
+        lights
     }
 
     /// The pass names, in order.
@@ -341,7 +360,17 @@ impl fmt::Display for Plan {
         writeln!(f, "direct:  {}", why(Effect::Direct))?;
         writeln!(f, "radiosity: {}", why(Effect::Radiosity))?;
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
-        let shadows: Vec<&str> = self.shadow_lights().map(|(_, n)| n).collect();
+        let shadows: Vec<String> = self
+            .shadow_lights()
+            .into_iter()
+            .map(|(light, name)| {
+                let kept = self
+                    .reused
+                    .iter()
+                    .any(|p| matches!(p, PassId::Shadow { light: l, .. } if *l == light));
+                if kept { format!("{name} (kept from an earlier frame)") } else { name.to_string() }
+            })
+            .collect();
         if shadows.is_empty() {
             writeln!(f, "shadows: none")?;
         } else {

@@ -255,6 +255,9 @@ pub struct Renderer {
     environment: Option<EnvironmentBuffer>,
     /// The last frame [`render`](Renderer::render) submitted, still perhaps on the GPU.
     in_flight: Option<wgpu::SubmissionIndex>,
+    /// Advanced by [`geometry_changed`](Renderer::geometry_changed): shadow maps drawn before
+    /// it are not reused.
+    geometry_generation: u64,
 }
 
 impl Renderer {
@@ -379,6 +382,7 @@ impl Renderer {
             recorded: Vec::new(),
             environment: None,
             in_flight: None,
+            geometry_generation: 0,
             settings,
         })
     }
@@ -454,15 +458,43 @@ impl Renderer {
         self.history = None;
     }
 
+    /// Tells the renderer that the scene's geometry or materials changed in place (the host
+    /// wrote new positions, indices or materials into the buffers a [`SceneBuffers`] holds): the
+    /// next frame redraws every shadow map. Without it, a light's shadow map is drawn once and
+    /// kept while the light, the scene's bounds, the shadow settings and the scene's buffers
+    /// (a scene uploaded or imported anew has new ones) stay the same; the plan lists the kept
+    /// ones in [`Plan::reused`]. The camera does not matter: it may move freely.
+    pub fn geometry_changed(&mut self) {
+        self.geometry_generation += 1;
+    }
+
     /// The plan for `scene` under this renderer's settings (what [`encode`](Renderer::encode)
     /// will run). The first frame of a one-pass layer-1 variant rasterizes the layers in two
-    /// passes (`raster.layer0`, `raster.layer1`) instead of `raster.layers`.
+    /// passes (`raster.layer0`, `raster.layer1`) instead of `raster.layers`. A shadow map an
+    /// earlier frame drew is kept while nothing it depends on changed (see
+    /// [`geometry_changed`](Renderer::geometry_changed)): its pass moves to [`Plan::reused`].
     pub fn plan(&self, scene: &SceneBuffers) -> Plan {
         let mut plan = Plan::new(scene.info(), &self.settings);
         if self.history.is_none()
             && let Some(i) = plan.passes.iter().position(|p| *p == PassId::RasterLayers)
         {
             plan.passes.splice(i..=i, [PassId::RasterLayer0, PassId::RasterLayer1]);
+        }
+        if let Some(shadows) = &self.stages.shadows {
+            let (s, generation) = (&self.settings, self.geometry_generation);
+            let kept: Vec<PassId> = plan
+                .passes
+                .iter()
+                .filter(|p| match p {
+                    PassId::Shadow { light, .. } => {
+                        shadows.current(*light, scene, &plan, s, generation)
+                    }
+                    _ => false,
+                })
+                .cloned()
+                .collect();
+            plan.passes.retain(|p| !kept.contains(p));
+            plan.reused = kept;
         }
         plan
     }
@@ -532,6 +564,9 @@ impl Renderer {
         }
         self.recorded = rec.finish();
         debug_assert_eq!(self.recorded, plan.passes, "the recorded passes are the plan's");
+        if let Some(shadows) = self.stages.shadows.as_mut() {
+            shadows.drew(scene, &plan, self.geometry_generation);
+        }
         self.plan = Some(plan);
         self.history = Some(current);
         Ok(())

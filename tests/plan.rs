@@ -116,7 +116,7 @@ fn switched_off_effects_cost_nothing() {
         Settings { effects: Effects::parse("ao,direct").unwrap(), ..Settings::default() };
     let plan = Plan::new(&info, &no_shadows);
     assert_eq!(plan.reason(Effect::Shadows), Some(Reason::Disabled));
-    assert!(plan.shadow_lights().next().is_none());
+    assert!(plan.shadow_lights().is_empty());
     assert!(Effects::parse("ao,bogus").unwrap_err().to_string().contains("bogus"));
     assert_eq!(Effects::parse("auto").unwrap(), Effects::default());
 }

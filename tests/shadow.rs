@@ -5,23 +5,22 @@ mod common;
 
 use common::{gpu, render, soup};
 use deep_gbuffer::scene::{Light, LightKind, Projection};
-use deep_gbuffer::{Camera, Settings, ShadowSettings};
+use deep_gbuffer::{Camera, PassId, Renderer, Scene, SceneBuffers, Settings, ShadowSettings};
 use glam::Vec3;
 
 /// A ground square and a horizontal square occluder one unit above it, lit by a directional
-/// light travelling along (1, -1, 0)/sqrt(2): the occluder over x in [-0.5, 0.5] shadows the
-/// ground over x in [0.5, 1.5] (z in [-0.5, 0.5]). Seen from straight above, orthographic,
-/// 16 pixels per unit, x from -2 to 2.
-#[test]
-fn directional_shadow_edge_falls_where_the_geometry_puts_it() {
-    let quad = |y: f32, lo: f32, hi: f32| {
+/// light travelling along (1, -1, 0)/sqrt(2): the occluder over x in [-0.5, 0.5] (moved by
+/// `shift` along x) shadows the ground over x in [0.5, 1.5] (z in [-0.5, 0.5]). Seen from
+/// straight above, orthographic, 16 pixels per unit, x from -2 to 2.
+fn occluder_scene(shift: f32) -> (Scene, Camera) {
+    let quad = |y: f32, lo: f32, hi: f32, dx: f32| {
         [
-            [Vec3::new(lo, y, lo), Vec3::new(lo, y, hi), Vec3::new(hi, y, hi)],
-            [Vec3::new(lo, y, lo), Vec3::new(hi, y, hi), Vec3::new(hi, y, lo)],
+            [Vec3::new(lo + dx, y, lo), Vec3::new(lo + dx, y, hi), Vec3::new(hi + dx, y, hi)],
+            [Vec3::new(lo + dx, y, lo), Vec3::new(hi + dx, y, hi), Vec3::new(hi + dx, y, lo)],
         ]
     };
-    let mut tris = quad(0.0, -3.0, 3.0).to_vec();
-    tris.extend(quad(1.0, -0.5, 0.5));
+    let mut tris = quad(0.0, -3.0, 3.0, 0.0).to_vec();
+    tris.extend(quad(1.0, -0.5, 0.5, shift));
     let mut scene = soup(&tris, true);
     scene.lights.push(Light {
         name: "sun".into(),
@@ -36,6 +35,12 @@ fn directional_shadow_edge_falls_where_the_geometry_puts_it() {
         up: Vec3::NEG_Z,
         projection: Projection::Orthographic { height: 4.0, near: 0.1, far: 10.0 },
     };
+    (scene, camera)
+}
+
+#[test]
+fn directional_shadow_edge_falls_where_the_geometry_puts_it() {
+    let (scene, camera) = occluder_scene(0.0);
     let (w, h) = (64u32, 64u32);
     for pcf in [0, 1] {
         let shadows = ShadowSettings { pcf, ..Default::default() };
@@ -88,5 +93,49 @@ fn lights_without_shadows_get_no_shadow_map() {
     );
     assert!(!r.renderer.passes().iter().any(|p| matches!(p, deep_gbuffer::PassId::Shadow { .. })));
     assert!(r.renderer.shadow_atlas_buffer().is_none());
-    assert!(r.renderer.last_plan().unwrap().shadow_lights().next().is_none());
+    assert!(r.renderer.last_plan().unwrap().shadow_lights().is_empty());
+}
+
+/// A static scene draws its shadow map once: later frames, from any camera, reuse it and light
+/// the scene exactly as a map drawn anew does. Geometry written in place is redrawn after
+/// `geometry_changed`, and a scene uploaded anew is redrawn by itself.
+#[test]
+fn a_static_scene_draws_its_shadow_map_once() {
+    let g = gpu();
+    let (scene, camera) = occluder_scene(0.0);
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let settings = Settings { timings: false, ..Settings::with_size(32, 32) };
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings.clone()).unwrap();
+    let shadow_drawn = |r: &Renderer| r.passes().iter().any(|p| matches!(p, PassId::Shadow { .. }));
+    let direct = |r: &Renderer| r.read_rgb(&g.device, &g.queue, r.direct_buffer()).unwrap();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    assert!(shadow_drawn(&renderer));
+    let first = direct(&renderer);
+    let aside = Camera { eye: Vec3::new(2.0, 4.0, 1.0), ..camera.clone() };
+    for cam in [aside, camera.clone()] {
+        renderer.render(&g.device, &g.queue, &buffers, &cam).unwrap();
+        assert!(!shadow_drawn(&renderer), "the map is kept when only the camera moves");
+        let plan = renderer.last_plan().unwrap();
+        assert_eq!(plan.reused.len(), 1);
+        assert_eq!(plan.shadow_lights(), vec![(0, "sun")]);
+    }
+    assert_eq!(direct(&renderer), first, "a kept map lights as the drawn one did");
+
+    // The occluder moves by half a unit, written into the scene's own buffer.
+    let (moved, _) = occluder_scene(0.5);
+    let positions: Vec<f32> = moved.positions.iter().flat_map(|p| p.to_array()).collect();
+    g.queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&positions));
+    renderer.geometry_changed();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    assert!(shadow_drawn(&renderer), "geometry_changed redraws the map");
+    let redrawn = direct(&renderer);
+    assert_ne!(redrawn, first, "the shadow moved");
+    let fresh = render(&moved, &camera, settings.clone());
+    assert_eq!(redrawn, direct(&fresh.renderer), "as a renderer that never saw the old scene");
+
+    // A scene uploaded anew has new buffers: its map is drawn without being told.
+    let back = SceneBuffers::upload(&g.device, &scene).unwrap();
+    renderer.render(&g.device, &g.queue, &back, &camera).unwrap();
+    assert!(shadow_drawn(&renderer));
+    assert_eq!(direct(&renderer), first);
 }

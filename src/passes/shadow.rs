@@ -1,6 +1,12 @@
 //! Shadow maps: each shadow-casting light's faces drawn by the compute rasterizer
 //! (`wgsl/raster.wgsl`, layer 0) from the light ([`crate::frame::light_faces`]), copied into one
 //! atlas that `wgsl/direct.wgsl` reads.
+//!
+//! A light's faces are kept from frame to frame while what they were drawn from holds: the
+//! faces' cameras and counts (the light, the scene's bounds, the shadow resolution), the scene's
+//! geometry buffers and the renderer's geometry generation, which
+//! [`Renderer::geometry_changed`](crate::Renderer::geometry_changed) advances. A static scene's
+//! later frames then draw no shadow map.
 
 use super::direct::ShadowInputs;
 use super::fill::Fill;
@@ -17,6 +23,47 @@ struct Group {
     light: usize,
     first: usize,
     count: usize,
+    /// What the faces in the atlas were drawn from (`None`: not drawn yet).
+    drawn: Option<Drawn>,
+}
+
+/// What a light's faces were drawn from: while it is unchanged, they are kept.
+#[derive(PartialEq)]
+struct Drawn {
+    /// The buffers the rasterizer reads (a re-uploaded scene has new ones).
+    geometry: [wgpu::Buffer; 4],
+    /// The faces' frame uniforms: cameras, resolution and the scene's counts.
+    faces: Vec<u8>,
+    /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)'s count.
+    generation: u64,
+}
+
+impl Drawn {
+    fn new(scene: &SceneBuffers, faces: &[(FrameUniform, ShadowFace)], generation: u64) -> Drawn {
+        let b = scene.buffers();
+        Drawn {
+            geometry: [&b.positions, &b.indices, &b.triangle_materials, &b.materials]
+                .map(wgpu::Buffer::clone),
+            faces: faces.iter().flat_map(|(u, _)| bytemuck::bytes_of(u).to_vec()).collect(),
+            generation,
+        }
+    }
+}
+
+/// The shadow passes of `plan`, drawn and reused, in light order.
+fn shadow_passes(plan: &Plan) -> Vec<PassId> {
+    let mut key: Vec<PassId> = plan
+        .passes
+        .iter()
+        .chain(&plan.reused)
+        .filter(|p| matches!(p, PassId::Shadow { .. }))
+        .cloned()
+        .collect();
+    key.sort_by_key(|p| match p {
+        PassId::Shadow { light, .. } => *light,
+        _ => 0,
+    });
+    key
 }
 
 /// The faces of every shadow-casting light: a visibility buffer and a camera per face, the
@@ -43,8 +90,7 @@ impl ShadowStage {
         scene: &SceneBuffers,
         plan: &Plan,
     ) -> Result<ShadowStage> {
-        let key: Vec<PassId> =
-            plan.passes.iter().filter(|p| matches!(p, PassId::Shadow { .. })).cloned().collect();
+        let key = shadow_passes(plan);
         match kept {
             Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => {
                 Ok(stage)
@@ -64,7 +110,7 @@ impl ShadowStage {
         let info = scene.info();
         let groups: Vec<Group> = light_faces(info, res, (0, 0, 0))
             .iter()
-            .map(|g| Group { light: g.light, first: g.first, count: g.faces.len() })
+            .map(|g| Group { light: g.light, first: g.first, count: g.faces.len(), drawn: None })
             .collect();
         let total: usize = groups.iter().map(|g| g.count).sum();
         let limits = device.limits();
@@ -128,6 +174,49 @@ impl ShadowStage {
             queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
         }
         queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces_words));
+    }
+
+    /// Whether `light`'s faces, drawn by an earlier frame, still hold for `scene` under `plan`
+    /// (its shadow passes, drawn or not, as [`Plan::new`] lists them) and `s`.
+    pub(crate) fn current(
+        &self,
+        light: usize,
+        scene: &SceneBuffers,
+        plan: &Plan,
+        s: &Settings,
+        generation: u64,
+    ) -> bool {
+        if self.key != shadow_passes(plan) || self.resolution != s.shadows.resolution {
+            return false;
+        }
+        let Some(drawn) =
+            self.groups.iter().find(|g| g.light == light).and_then(|g| g.drawn.as_ref())
+        else {
+            return false;
+        };
+        let b = scene.buffers();
+        let counts = (b.triangle_count, b.material_count, b.vertex_count);
+        light_faces(scene.info(), self.resolution, counts)
+            .iter()
+            .find(|g| g.light == light)
+            .is_some_and(|g| *drawn == Drawn::new(scene, &g.faces, generation))
+    }
+
+    /// Notes that the frame just recorded drew the faces of `plan`'s shadow passes.
+    pub(crate) fn drew(&mut self, scene: &SceneBuffers, plan: &Plan, generation: u64) {
+        let b = scene.buffers();
+        let counts = (b.triangle_count, b.material_count, b.vertex_count);
+        for faces in light_faces(scene.info(), self.resolution, counts) {
+            let drawn = plan
+                .passes
+                .iter()
+                .any(|p| matches!(p, PassId::Shadow { light, .. } if *light == faces.light));
+            if let Some(group) = self.groups.iter_mut().find(|g| g.light == faces.light)
+                && drawn
+            {
+                group.drawn = Some(Drawn::new(scene, &faces.faces, generation));
+            }
+        }
     }
 
     /// What the direct kernel reads.
