@@ -32,7 +32,7 @@ fn packed_error(gpu: &Gpu, buffers: &SceneBuffers, camera: &Camera, w: u32, h: u
         let mut r = Renderer::new(
             &gpu.device,
             &gpu.queue,
-            Settings { precision, timings: false, ..Settings::with_size(w, h) },
+            Settings { precision, layers: 2, timings: false, ..Settings::with_size(w, h) },
         )
         .unwrap();
         r.render(&gpu.device, &gpu.queue, buffers, camera).unwrap();
