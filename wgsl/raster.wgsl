@@ -107,8 +107,10 @@ struct Setup {
     kind: u32,
 }
 
+// At most 3e38 in magnitude, NaN excluded by its exponent bits: a comparison with NaN may be
+// folded away by a compiler that assumes there are none.
 fn finite(x: f32) -> bool {
-    return abs(x) <= 3.0e38;
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u && abs(x) <= 3.0e38;
 }
 
 fn position(vertex: u32) -> vec3<f32> {
@@ -353,11 +355,14 @@ fn texture_outside(m: Material) -> bool {
 #endif
 }
 
+// Counted once a frame: by the layer-0 raster, in its last phase on the 32-bit path.
 fn count_diagnostic(word: u32) {
 #if WRITE_L0
+#if !DEPTH_PHASE
     if (frame.flags & FRAME_DIAGNOSTICS) != 0u {
         atomicAdd(&bins[word], 1u);
     }
+#endif
 #endif
 }
 
