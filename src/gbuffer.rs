@@ -32,7 +32,7 @@ pub fn vis_depth(word: u64) -> Option<f32> {
 }
 
 /// One G-buffer sample. Mirrors `struct GSample` in `wgsl/shared/gbuffer.wgsl`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GSample {
     /// View depth (0: no surface).
     pub depth: f32,
@@ -50,8 +50,42 @@ pub struct GSample {
     pub motion: Vec2,
     /// Mirror reflectivity.
     pub reflectivity: f32,
+    /// The material's ambient occlusion (its occlusion texture; 1 without one): it multiplies
+    /// the ambient term.
+    pub occlusion: f32,
     /// Material id.
     pub material: u32,
+}
+
+impl Default for GSample {
+    /// No surface: every attribute zero, the occlusion 1.
+    fn default() -> Self {
+        GSample {
+            depth: 0.0,
+            normal: Vec3::ZERO,
+            base_color: Vec3::ZERO,
+            roughness: 0.0,
+            emissive: Vec3::ZERO,
+            metallic: 0.0,
+            motion: Vec2::ZERO,
+            reflectivity: 0.0,
+            occlusion: 1.0,
+            material: 0,
+        }
+    }
+}
+
+/// Reflectivity and occlusion (12 bits each) as one integer-valued f32, as
+/// `pack_factors` in `wgsl/shared/gbuffer.wgsl` (the full encoding's fifteenth word).
+fn pack_factors(reflectivity: f32, occlusion: f32) -> f32 {
+    let r = (reflectivity.clamp(0.0, 1.0) * 4095.0).round() as u32;
+    let o = (occlusion.clamp(0.0, 1.0) * 4095.0).round() as u32;
+    (r + (o << 12)) as f32
+}
+
+fn unpack_factors(x: f32) -> (f32, f32) {
+    let v = x as u32;
+    ((v & 0xfff) as f32 / 4095.0, (v >> 12) as f32 / 4095.0)
 }
 
 /// One G-buffer layer on the CPU.
@@ -149,6 +183,7 @@ impl GBufferLayer {
                             metallic: bm.y,
                             motion: unpack2x16float(w[5]),
                             reflectivity: f32::from(w[6] as u16) / 65535.0,
+                            occlusion: f32::from(w[7] as u16) / 65535.0,
                             material: w[6] >> 16,
                         }
                     })
@@ -164,8 +199,8 @@ impl GBufferLayer {
     }
 }
 
-/// The channels of a G-buffer layer in an EXR file, in the order of the full encoding's words.
-pub const EXR_CHANNELS: [&str; 16] = [
+/// The channels of a G-buffer layer in an EXR file, one per attribute.
+pub const EXR_CHANNELS: [&str; 17] = [
     "depth",
     "normal.X",
     "normal.Y",
@@ -181,12 +216,13 @@ pub const EXR_CHANNELS: [&str; 16] = [
     "motion.X",
     "motion.Y",
     "reflectivity",
+    "occlusion",
     "material",
 ];
 
 impl GSample {
-    /// The sixteen words of the full encoding (`Precision::Full`), in [`EXR_CHANNELS`] order.
-    pub fn words(&self) -> [f32; 16] {
+    /// Every attribute as a number, in [`EXR_CHANNELS`] order.
+    pub fn channels(&self) -> [f32; 17] {
         let (n, c, e) = (self.normal, self.base_color, self.emissive);
         [
             self.depth,
@@ -204,11 +240,12 @@ impl GSample {
             self.motion.x,
             self.motion.y,
             self.reflectivity,
+            self.occlusion,
             self.material as f32,
         ]
     }
 
-    fn from_words(w: &[f32; 16]) -> GSample {
+    fn from_channels(w: &[f32; 17]) -> GSample {
         GSample {
             depth: w[0],
             normal: Vec3::new(w[1], w[2], w[3]),
@@ -218,8 +255,28 @@ impl GSample {
             metallic: w[11],
             motion: Vec2::new(w[12], w[13]),
             reflectivity: w[14],
-            material: w[15] as u32,
+            occlusion: w[15],
+            material: w[16] as u32,
         }
+    }
+
+    /// The sixteen words of the full encoding (`Precision::Full`): the channels, reflectivity
+    /// and occlusion packed into one word (12 bits each).
+    pub fn words(&self) -> [f32; 16] {
+        let c = self.channels();
+        let mut w = [0.0; 16];
+        w[..14].copy_from_slice(&c[..14]);
+        w[14] = pack_factors(self.reflectivity, self.occlusion);
+        w[15] = c[16];
+        w
+    }
+
+    fn from_words(w: &[f32; 16]) -> GSample {
+        let (reflectivity, occlusion) = unpack_factors(w[14]);
+        let mut c = [0.0; 17];
+        c[..14].copy_from_slice(&w[..14]);
+        (c[14], c[15], c[16]) = (reflectivity, occlusion, w[15]);
+        GSample::from_channels(&c)
     }
 }
 
@@ -243,7 +300,7 @@ impl GBufferLayer {
                     .iter()
                     .enumerate()
                     .map(|(c, name)| {
-                        let values = l.samples.iter().map(|s| s.words()[c]).collect();
+                        let values = l.samples.iter().map(|s| s.channels()[c]).collect();
                         AnyChannel::new(*name, FlatSamples::F32(values))
                     })
                     .collect();
@@ -288,21 +345,28 @@ impl GBufferLayer {
         let mut layers = Vec::new();
         for (i, layer) in image.layer_data.iter().enumerate() {
             let (w, h) = (layer.size.0, layer.size.1);
-            let mut columns = Vec::with_capacity(16);
+            let mut columns = Vec::with_capacity(EXR_CHANNELS.len());
             for name in EXR_CHANNELS {
-                let channel = layer
-                    .channel_data
-                    .list
-                    .iter()
-                    .find(|c| c.name.to_string() == name)
-                    .ok_or_else(|| bad(format!("layer {i} has no channel `{name}`")))?;
+                let channel = layer.channel_data.list.iter().find(|c| c.name.to_string() == name);
+                // Files written before the occlusion channel existed hold none: 1 throughout.
+                let Some(channel) = channel else {
+                    if name == "occlusion" {
+                        columns.push(None);
+                        continue;
+                    }
+                    return Err(bad(format!("layer {i} has no channel `{name}`")));
+                };
                 match &channel.sample_data {
-                    FlatSamples::F32(v) if v.len() == w * h => columns.push(v),
+                    FlatSamples::F32(v) if v.len() == w * h => columns.push(Some(v)),
                     _ => return Err(bad(format!("layer {i}: channel `{name}` is not f32"))),
                 }
             }
             let samples = (0..w * h)
-                .map(|p| GSample::from_words(&std::array::from_fn(|c| columns[c][p])))
+                .map(|p| {
+                    GSample::from_channels(&std::array::from_fn(|c| {
+                        columns[c].map_or(1.0, |v| v[p])
+                    }))
+                })
                 .collect();
             let (width, height) = (w as u32, h as u32);
             layers.push(GBufferLayer { width, height, samples });

@@ -68,8 +68,8 @@ pub use gbuffer::{GBufferLayer, GSample};
 pub use passes::radiosity::RadiosityBuffers;
 pub use plan::{Effect, PassId, Plan, Reason};
 pub use renderer::{Diagnostics, Renderer, Terms};
-pub use scene::upload::{GpuMaterial, ImportedBuffers, SceneBuffers};
-pub use scene::{Camera, Projection, Scene, SceneInfo};
+pub use scene::upload::{GpuMaterial, GpuTextureSlot, ImportedBuffers, SceneBuffers};
+pub use scene::{Camera, Filter, Material, Projection, Scene, SceneInfo, TextureRef, Wrap};
 pub use settings::{
     AoEstimator, AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision,
     Preset, RadiosityEstimator, RadiositySettings, ReflectionSettings, Settings, ShadowSettings,

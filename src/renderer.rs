@@ -779,7 +779,8 @@ impl Renderer {
                     ),
                 ));
             }
-            if let Some(p) = l.samples.iter().position(|x| !x.words().iter().all(|w| w.is_finite()))
+            if let Some(p) =
+                l.samples.iter().position(|x| !x.channels().iter().all(|w| w.is_finite()))
             {
                 return Err(Error::setting(
                     "gbuffer",

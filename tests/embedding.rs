@@ -1,7 +1,7 @@
 //! deep-gbuffer as one stage of a host's frame: the host owns the device, its geometry buffers
 //! and its command encoder, and reads the composite back from its own buffer.
 
-use deep_gbuffer::scene::upload::MATERIAL_DOUBLE_SIDED;
+use deep_gbuffer::scene::upload::{MATERIAL_DOUBLE_SIDED, SLOT_BASE_COLOR};
 use deep_gbuffer::scene::{Light, LightKind};
 use deep_gbuffer::{
     Camera, GpuMaterial, ImportedBuffers, Renderer, SceneBuffers, SceneInfo, Settings,
@@ -68,6 +68,8 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
         ),
         materials: storage(&device, "host.materials", bytemuck::bytes_of(&material)),
         texels: storage(&device, "host.texels", &[0u8; 16]),
+        uvs1: None,
+        tangents: None,
         vertex_count: 4,
         triangle_count: 2,
         material_count: 1,
@@ -244,16 +246,21 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     ];
     let normals: Vec<f32> = (0..8).flat_map(|_| [0.0, 0.0, 1.0]).collect();
     let uvs = [0.25f32; 16];
-    let material = |base: f32, flags: u32, texture_offset: u32| GpuMaterial {
-        base_color: [base, base, base, 1.0],
-        roughness: 1.0,
-        flags,
-        texture_offset,
-        texture_width: 2,
-        texture_height: 2,
-        ..Default::default()
+    let material = |base: f32, flags: u32, texture_offset: u32| {
+        let mut m = GpuMaterial {
+            base_color: [base, base, base, 1.0],
+            roughness: 1.0,
+            flags,
+            ..Default::default()
+        };
+        m.slots[SLOT_BASE_COLOR] = deep_gbuffer::GpuTextureSlot::new(
+            &deep_gbuffer::TextureRef::new(0),
+            (texture_offset, 2, 2),
+            1.0,
+        );
+        m
     };
-    let textured = deep_gbuffer::scene::upload::MATERIAL_TEXTURED;
+    let textured = deep_gbuffer::scene::upload::slot_flag(SLOT_BASE_COLOR);
     let import = |triangles: &[([u32; 3], u32)], materials: &[GpuMaterial]| {
         let indices: Vec<u32> = triangles.iter().flat_map(|(t, _)| *t).collect();
         let ids: Vec<u32> = triangles.iter().map(|(_, m)| *m).collect();
@@ -266,6 +273,8 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             materials: storage(&device, "host.materials", bytemuck::cast_slice(materials)),
             // Four texels: a 2x2 texture fits at offset 0 and not at offset 3.
             texels: storage(&device, "host.texels", &[255u8; 16]),
+            uvs1: None,
+            tangents: None,
             vertex_count: 8,
             triangle_count: triangles.len() as u32,
             material_count: materials.len() as u32,

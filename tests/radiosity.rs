@@ -172,7 +172,7 @@ fn nan_input_never_enters_the_history() {
     let mut b = uploaded.buffers().clone();
     let mut materials: Vec<deep_gbuffer::GpuMaterial> = bytemuck::pod_collect_to_vec(
         &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, &b.materials).unwrap()
-            [..scene.materials.len() * 64],
+            [..scene.materials.len() * std::mem::size_of::<deep_gbuffer::GpuMaterial>()],
     );
     materials[0].emissive = [f32::NAN, 1.0, f32::INFINITY];
     b.materials = deep_gbuffer::gpu::storage_buffer_init(

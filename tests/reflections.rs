@@ -110,6 +110,7 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
                 uvs: &[],
                 indices: &[0, 1, 2, 0, 2, 3],
                 material,
+                ..MeshData::default()
             })
             .unwrap();
     }
@@ -229,6 +230,7 @@ fn a_convex_mirror_never_sees_itself() {
         uvs: &[],
         indices: &indices,
         material: 0,
+        ..MeshData::default()
     };
     scene.push_mesh(mesh).unwrap();
     scene.ambient = Vec3::new(0.0, 0.0, 0.5);
@@ -324,6 +326,7 @@ fn missed_rays_see_the_environment_map() {
         uvs: &[],
         indices: &[0, 1, 2, 0, 2, 3],
         material: 0,
+        ..MeshData::default()
     };
     scene.push_mesh(mesh).unwrap();
     scene.ambient = Vec3::splat(0.1);

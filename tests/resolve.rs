@@ -5,7 +5,7 @@ mod common;
 use approx::assert_abs_diff_eq;
 use common::{GBUFFER_FIXTURES, fixture, gpu, render};
 use deep_gbuffer::cpu::resolve as cpu;
-use deep_gbuffer::{GSample, Precision, Scene, Settings};
+use deep_gbuffer::{Filter, GSample, Precision, Scene, Settings, Wrap};
 use glam::Vec3;
 
 /// f32 evaluation order differs between the shader compiler and Rust (fused multiply-adds,
@@ -116,20 +116,25 @@ fn textured_gltf_matches_cpu_reference() {
     compare(&scene, Precision::Full, 96, 72, TEXTURED_TOLERANCE);
 }
 
-/// Every texture slot the renderer reads (base colour, emissive, metallic-roughness), against
-/// the CPU resolve in both precisions, on a fixture whose textures vary across the view.
+/// Every texture slot (base colour, emissive, metallic-roughness, normal, occlusion), sampler
+/// mode (clamp, mirrored repeat, nearest), the second coordinate set and texture transforms,
+/// against the CPU resolve in both precisions, on a fixture whose textures vary across the view
+/// (fixtures/textured/generate.py).
 #[test]
 fn every_texture_slot_matches_cpu_reference() {
     let scene = Scene::load(&fixture("textured/textured-quad.gltf")).unwrap();
-    assert_eq!(scene.textures.len(), 3, "each image decoded once");
+    assert_eq!(scene.textures.len(), 5, "each image decoded once");
+    assert!(scene.warnings.is_empty(), "everything the file uses is read: {:?}", scene.warnings);
     let m = &scene.materials[0];
-    assert!(m.base_color_texture.is_some() && m.emissive_texture.is_some());
-    assert!(m.metallic_roughness_texture.is_some());
-    assert!(
-        scene.warnings.iter().any(|w| w.contains("a normal texture (1)")),
-        "{:?}",
-        scene.warnings
-    );
+    assert!(m.texture_slots().iter().all(Option::is_some));
+    let (base, emissive) = (m.base_color_texture.unwrap(), m.emissive_texture.unwrap());
+    assert_eq!((base.wrap_s, base.wrap_t), (Wrap::ClampToEdge, Wrap::MirroredRepeat));
+    assert_eq!((emissive.filter, emissive.tex_coord), (Filter::Nearest, 1));
+    assert!((base.transform.matrix2.x_axis.x - 1.6 * 0.3f32.cos()).abs() < 1e-6);
+    assert_eq!(m.occlusion_texture.unwrap().transform.translation, glam::Vec2::new(0.25, 0.0));
+    assert_eq!((m.normal_scale, m.occlusion_strength), (0.8, 0.7));
+    assert_eq!(scene.uvs1.len(), scene.positions.len());
+    assert_eq!(scene.tangents.len(), scene.positions.len(), "MikkTSpace's, the file has none");
     let camera = deep_gbuffer::Camera::perspective(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 60.0, 0.1);
     compare_from(&scene, &camera, Precision::Full, 64, 48, TEXTURED_TOLERANCE);
     // Packed: the 8-bit and binary16 rounding on top of the texture decoding's own error.
@@ -141,7 +146,8 @@ fn every_texture_slot_matches_cpu_reference() {
         48,
         PACKED_COLOR_TOLERANCE + TEXTURED_TOLERANCE,
     );
-    // The textures reach the G-buffer: emission, roughness, metal and reflectivity vary.
+    // The textures reach the G-buffer: emission, roughness, metal, reflectivity and occlusion
+    // vary; the nearest-read checker gives its two values only.
     let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(64, 48) });
     let g = gpu();
     let layer = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
@@ -151,13 +157,88 @@ fn every_texture_slot_matches_cpu_reference() {
         v.iter().copied().fold(f32::MIN, f32::max) - v.iter().copied().fold(f32::MAX, f32::min)
     };
     assert!(spread(&|s| s.emissive.x) > 1.0, "the emission checker");
+    assert!(
+        shown.iter().all(|s| s.emissive.x == 0.0 || (s.emissive.x - 2.0).abs() < 1e-5),
+        "nearest texels only"
+    );
     assert!(spread(&|s| s.roughness) > 0.5, "the roughness ramp");
     assert!(spread(&|s| s.metallic) > 0.9, "metal in one half");
     assert!(spread(&|s| s.reflectivity) > 0.3, "reflectivity per texel");
+    assert!(spread(&|s| s.occlusion) > 0.3, "the occlusion ramp");
+    assert!(shown.iter().all(|s| s.occlusion >= 0.3 - 1e-3), "strength 0.7 keeps 0.3 at least");
+    // The normal texture leans the left half towards +x and the right half up the image (+y),
+    // the frame of the generated tangents following glTF's convention.
+    let (w, _) = (layer.width, layer.height);
+    for (p, s) in layer.samples.iter().enumerate().filter(|(_, s)| s.depth > 0.0) {
+        let x = (p as u32 % w) as f32 / w as f32;
+        // Where bilinear filtering reads one half only (texel centres 1 and 2, 3 and 4 of 4
+        // across a quad that spans 0.24 to 0.76 of the view).
+        let half =
+            [(0.32..=0.42, true), (0.58..=0.68, false)].into_iter().find(|(r, _)| r.contains(&x));
+        if let Some((_, left)) = half {
+            let (lean, other) =
+                if left { (s.normal.x, s.normal.y) } else { (s.normal.y, s.normal.x) };
+            assert!(lean > 0.25 && other.abs() < 0.05, "pixel {p}: normal {}", s.normal);
+        }
+    }
     assert!(
         r.renderer.passes().contains(&deep_gbuffer::PassId::Reflections),
         "a metal that reflects"
     );
+}
+
+/// A normal texture on a scene built in code, without tangents: each triangle's own
+/// texture-space frame gives the same lean as MikkTSpace's on the same quad, and a mirrored
+/// coordinate set mirrors the frame (the lean stays up the image).
+#[test]
+fn normal_textures_lean_the_same_way_without_tangents() {
+    let quad = |mirrored: bool| {
+        let mut scene = Scene::default();
+        let u = |x: f32| if mirrored { 1.0 - x } else { x };
+        scene
+            .push_mesh(deep_gbuffer::scene::MeshData {
+                positions: &[
+                    Vec3::new(-1.0, -1.0, 0.0),
+                    Vec3::new(1.0, -1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 0.0),
+                    Vec3::new(-1.0, 1.0, 0.0),
+                ],
+                normals: &[Vec3::Z; 4],
+                uvs: &[
+                    glam::Vec2::new(u(0.0), 1.0),
+                    glam::Vec2::new(u(1.0), 1.0),
+                    glam::Vec2::new(u(1.0), 0.0),
+                    glam::Vec2::new(u(0.0), 0.0),
+                ],
+                indices: &[0, 1, 2, 0, 2, 3],
+                ..Default::default()
+            })
+            .unwrap();
+        // One texel leaning towards +u and up the image.
+        scene.textures.push(deep_gbuffer::scene::Texture {
+            width: 1,
+            height: 1,
+            rgba8: vec![200, 200, 180, 255],
+        });
+        scene.materials.push(deep_gbuffer::Material {
+            normal_texture: Some(deep_gbuffer::TextureRef::new(0)),
+            ..Default::default()
+        });
+        scene.ensure_lights();
+        scene
+    };
+    let camera = deep_gbuffer::Camera::perspective(Vec3::new(0.0, 0.0, 2.5), Vec3::ZERO, 40.0, 0.1);
+    let g = gpu();
+    for mirrored in [false, true] {
+        let scene = quad(mirrored);
+        compare_from(&scene, &camera, Precision::Full, 16, 16, TEXTURED_TOLERANCE);
+        let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(16, 16) });
+        let layer = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+        let n = layer.at(8, 8).normal;
+        // +u is +x, or -x where u is mirrored; up the image is +y either way.
+        let x = if mirrored { -n.x } else { n.x };
+        assert!(x > 0.3 && n.y > 0.3 && n.z > 0.2, "mirrored {mirrored}: {n}");
+    }
 }
 
 #[test]
@@ -196,8 +277,8 @@ fn stored_gbuffers_are_what_the_rasterizer_draws() {
         for (layer, expected) in stored.iter().enumerate() {
             let drawn = r.renderer.read_gbuffer(&g.device, &g.queue, layer).unwrap();
             for (p, (a, b)) in drawn.samples.iter().zip(&expected.samples).enumerate() {
-                let (a, b) = (a.words(), b.words());
-                for c in 0..16 {
+                let (a, b) = (a.channels(), b.channels());
+                for c in 0..a.len() {
                     let tolerance = FULL_TOLERANCE * b[c].abs().max(1.0);
                     assert!(
                         (a[c] - b[c]).abs() <= tolerance,

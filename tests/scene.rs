@@ -42,8 +42,13 @@ fn gltf_fixtures_load() {
     assert!(suzanne.triangle_count() > 3000);
     assert_eq!(suzanne.textures.len(), 2, "the base-colour and metallic-roughness textures");
     let m = &suzanne.materials[0];
+    let texture = |t: Option<deep_gbuffer::TextureRef>| t.map(|t| t.texture);
     assert_eq!(
-        (m.base_color_texture, m.metallic_roughness_texture, m.emissive_texture),
+        (
+            texture(m.base_color_texture),
+            texture(m.metallic_roughness_texture),
+            texture(m.emissive_texture)
+        ),
         (Some(0), Some(1), None)
     );
     assert!(suzanne.uvs.iter().any(|uv| *uv != glam::Vec2::ZERO));

@@ -153,7 +153,7 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        out0 = boost(s0.base_color) * (direct0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.base_color / PI_R * e) + s0.emissive;
+        out0 = boost(s0.base_color) * (direct0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e) + s0.emissive;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);

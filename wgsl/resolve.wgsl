@@ -21,6 +21,10 @@
 @group(0) @binding(7) var<storage, read> texels: array<u32>;
 @group(0) @binding(8) var<storage, read> vis: array<u32>;
 @group(0) @binding(9) var<storage, read_write> gbuffer: array<GWord>;
+// The second coordinate coord_set (2 per vertex) and the tangents (4 per vertex); a scene without
+// them binds a short buffer, which reads as zero.
+@group(0) @binding(10) var<storage, read> uvs1: array<f32>;
+@group(0) @binding(11) var<storage, read> tangents: array<f32>;
 
 fn load3(buf: u32, i: u32) -> vec3<f32> {
     if buf == 0u {
@@ -33,30 +37,142 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
-fn texel(t: TextureRef, x: u32, y: u32, srgb: bool) -> vec3<f32> {
+fn texel(t: TextureSlot, x: u32, y: u32, srgb: bool) -> vec3<f32> {
     let c = unpack4x8unorm(texels[t.offset + y * t.width + x]).rgb;
     return select(c, srgb_to_linear(c), srgb);
 }
 
-// Bilinear, repeating; sRGB texels are decoded before they are filtered.
-fn sample_texture(t: TextureRef, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
+// A coordinate brought into one period of its wrap mode (exactly, before it is scaled to
+// texels, so that a large coordinate keeps its precision): [0, 1) repeating, [0, 1] clamped,
+// [0, 2) mirrored.
+fn wrap_reduce(u: f32, mode: u32) -> f32 {
+    if mode == 1u {
+        return clamp(u, 0.0, 1.0);
+    }
+    if mode == 2u {
+        return u - 2.0 * floor(u * 0.5);
+    }
+    return fract(u);
+}
+
+// Texel index i (in [-1, 2n] after wrap_reduce) as the wrap mode reads it.
+fn wrap_index(i: i32, n: i32, mode: u32) -> u32 {
+    if mode == 1u {
+        return u32(clamp(i, 0, n - 1));
+    }
+    if mode == 2u {
+        if i < 0 {
+            return 0u;
+        }
+        if i < n {
+            return u32(i);
+        }
+        if i - n < n {
+            return u32(n - 1 - (i - n));
+        }
+        return 0u;
+    }
+    return u32((i % n + n) % n);
+}
+
+// Texture slot t at uv (already transformed), wrapped and filtered as its sampler says; sRGB
+// texels are decoded before they are filtered.
+fn sample_texture(t: TextureSlot, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
     let size = vec2<f32>(f32(t.width), f32(t.height));
-    let p = fract(uv) * size - 0.5;
-    let f = fract(p);
-    let i0 = vec2<i32>(floor(p));
+    let ws = t.sampler & 3u;
+    let wt = (t.sampler >> 2u) & 3u;
+    let r = vec2<f32>(wrap_reduce(uv.x, ws), wrap_reduce(uv.y, wt));
     let w = i32(t.width);
     let h = i32(t.height);
-    let x0 = u32((i0.x % w + w) % w);
-    let y0 = u32((i0.y % h + h) % h);
-    let x1 = (x0 + 1u) % t.width;
-    let y1 = (y0 + 1u) % t.height;
+    if (t.sampler & 16u) != 0u {
+        let i = vec2<i32>(floor(r * size));
+        return texel(t, wrap_index(i.x, w, ws), wrap_index(i.y, h, wt), srgb);
+    }
+    let p = r * size - 0.5;
+    let f = fract(p);
+    let i0 = vec2<i32>(floor(p));
+    let x0 = wrap_index(i0.x, w, ws);
+    let y0 = wrap_index(i0.y, h, wt);
+    let x1 = wrap_index(i0.x + 1, w, ws);
+    let y1 = wrap_index(i0.y + 1, h, wt);
     let top = mix(texel(t, x0, y0, srgb), texel(t, x1, y0, srgb), f.x);
     let bottom = mix(texel(t, x0, y1, srgb), texel(t, x1, y1, srgb), f.x);
     return mix(top, bottom, f.y);
 }
 
+// Vertex i's coordinates in coord_set 0 or 1 (zero where the buffer holds none).
+fn vertex_uv(i: u32, coord_set: u32) -> vec2<f32> {
+    if coord_set == 0u {
+        return vec2<f32>(uvs[2u * i], uvs[2u * i + 1u]);
+    }
+    if 2u * i + 1u < arrayLength(&uvs1) {
+        return vec2<f32>(uvs1[2u * i], uvs1[2u * i + 1u]);
+    }
+    return vec2<f32>(0.0);
+}
+
+fn vertex_tangent(i: u32) -> vec4<f32> {
+    if 4u * i + 3u < arrayLength(&tangents) {
+        return vec4<f32>(tangents[4u * i], tangents[4u * i + 1u], tangents[4u * i + 2u], tangents[4u * i + 3u]);
+    }
+    return vec4<f32>(0.0);
+}
+
+// The point's coordinates as slot t reads them: its coord_set interpolated, then its transform.
+fn slot_uv(t: TextureSlot, tri: vec3<u32>, bary: vec3<f32>) -> vec2<f32> {
+    let coord_set = (t.sampler >> 5u) & 1u;
+    let uv = vertex_uv(tri.x, coord_set) * bary.x + vertex_uv(tri.y, coord_set) * bary.y + vertex_uv(tri.z, coord_set) * bary.z;
+    return vec2<f32>(dot(t.transform_u.xy, uv) + t.transform_u.z, dot(t.transform_v.xy, uv) + t.transform_v.z);
+}
+
+// Whether material m reads slot k at this point: the slot is used, its texture fits the texel
+// buffer and its coordinates are finite and moderate.
+fn reads_slot(m: Material, k: u32, uv: vec2<f32>) -> bool {
+    return uses_texture(m, k, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6));
+}
+
+// The normal n turned by the tangent-space normal texture value c (linear rgb): the frame is
+// the vertex tangents interpolated, or where they are missing the triangle's own
+// texture-space frame (dP/du, with the bitangent's sign from dP/dv as glTF's coordinates run);
+// n unchanged where no frame exists.
+fn normal_mapped(n: vec3<f32>, c: vec3<f32>, scale: f32, tri: vec3<u32>, bary: vec3<f32>, w: array<vec3<f32>, 3>, coord_set: u32) -> vec3<f32> {
+    let t0 = vertex_tangent(tri.x);
+    let t1 = vertex_tangent(tri.y);
+    let t2 = vertex_tangent(tri.z);
+    var t = t0.xyz * bary.x + t1.xyz * bary.y + t2.xyz * bary.z;
+    var sign = select(1.0, -1.0, t0.w < 0.0);
+    if !(dot(t, t) > 1e-12 && dot(t, t) <= 3e38) {
+        let a = vertex_uv(tri.x, coord_set);
+        let d1 = vertex_uv(tri.y, coord_set) - a;
+        let d2 = vertex_uv(tri.z, coord_set) - a;
+        let e1 = w[1] - w[0];
+        let e2 = w[2] - w[0];
+        let r = d1.x * d2.y - d2.x * d1.y;
+        if !(abs(r) > 1e-20) {
+            return n;
+        }
+        t = (e1 * d2.y - e2 * d1.y) / r;
+        let b = (e2 * d1.x - e1 * d2.x) / r;
+        sign = select(-1.0, 1.0, dot(cross(n, t), b) < 0.0);
+    }
+    t = t - n * dot(n, t);
+    let tl = length(t);
+    if !(tl > 1e-12 && tl <= 3e38) {
+        return n;
+    }
+    t = t / tl;
+    let b = cross(n, t) * sign;
+    let v = c * 2.0 - 1.0;
+    let mapped = t * (v.x * scale) + b * (v.y * scale) + n * v.z;
+    let ml = length(mapped);
+    if !(ml > 1e-12 && ml <= 3e38) {
+        return n;
+    }
+    return mapped / ml;
+}
+
 fn empty_sample() -> GSample {
-    return GSample(0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec2<f32>(0.0), 0.0, 0u);
+    return GSample(0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec2<f32>(0.0), 0.0, 1.0, 0u);
 }
 
 fn shade(pixel: vec2<u32>) -> GSample {
@@ -122,6 +238,17 @@ fn shade(pixel: vec2<u32>) -> GSample {
     if nl > 1e-12 && nl <= 3e38 {
         n = n_interp / nl;
     }
+    let tri = vec3<u32>(i0, i1, i2);
+    let mid = tri_materials[id];
+    if mid < frame.material_count {
+        let m = materials[mid];
+        let t = m.slots[SLOT_NORMAL];
+        let uv = slot_uv(t, tri, bary);
+        if reads_slot(m, SLOT_NORMAL, uv) {
+            let c = sample_texture(t, uv, false);
+            n = normal_mapped(n, c, t.transform_u.w, tri, bary, array<vec3<f32>, 3>(w0, w1, w2), (t.sampler >> 5u) & 1u);
+        }
+    }
     // Face the camera (double-sided surfaces seen from behind, and interpolation past the horizon).
     if dot(geo, to_eye) < 0.0 {
         geo = -geo;
@@ -134,35 +261,41 @@ fn shade(pixel: vec2<u32>) -> GSample {
         n = geo;
     }
 
-    let mid = tri_materials[id];
     var s = empty_sample();
     s.depth = d;
     s.normal = n;
     s.material = mid;
     if mid < frame.material_count {
         let m = materials[mid];
-        let count = arrayLength(&texels);
-        let uv = vec2<f32>(uvs[2u * i0], uvs[2u * i0 + 1u]) * bary.x
-            + vec2<f32>(uvs[2u * i1], uvs[2u * i1 + 1u]) * bary.y
-            + vec2<f32>(uvs[2u * i2], uvs[2u * i2 + 1u]) * bary.z;
-        let uv_ok = all(abs(uv) < vec2<f32>(1e6));
         var base = m.base_color.rgb;
-        if uv_ok && uses_texture(m, MATERIAL_TEXTURED, base_texture(m), count) {
-            base *= sample_texture(base_texture(m), uv, true);
+        let tb = m.slots[SLOT_BASE_COLOR];
+        let uv_b = slot_uv(tb, tri, bary);
+        if reads_slot(m, SLOT_BASE_COLOR, uv_b) {
+            base *= sample_texture(tb, uv_b, true);
         }
         var emissive = m.emissive;
-        if uv_ok && uses_texture(m, MATERIAL_EMISSIVE_TEXTURED, emissive_texture(m), count) {
-            emissive *= sample_texture(emissive_texture(m), uv, true);
+        let te = m.slots[SLOT_EMISSIVE];
+        let uv_e = slot_uv(te, tri, bary);
+        if reads_slot(m, SLOT_EMISSIVE, uv_e) {
+            emissive *= sample_texture(te, uv_e, true);
         }
         var roughness = unit(m.roughness);
         var metallic = unit(m.metallic);
         var reflectivity = unit(m.reflectivity);
-        if uv_ok && uses_texture(m, MATERIAL_METALLIC_ROUGHNESS_TEXTURED, metallic_roughness_texture(m), count) {
-            let mr = sample_texture(metallic_roughness_texture(m), uv, false);
+        let tm = m.slots[SLOT_METALLIC_ROUGHNESS];
+        let uv_m = slot_uv(tm, tri, bary);
+        if reads_slot(m, SLOT_METALLIC_ROUGHNESS, uv_m) {
+            let mr = sample_texture(tm, uv_m, false);
             roughness = unit(roughness * mr.g);
             metallic = unit(metallic * mr.b);
             // The glTF rule the loader applies to the factors, per texel.
             reflectivity = metallic * (1.0 - roughness);
+        }
+        let to = m.slots[SLOT_OCCLUSION];
+        let uv_o = slot_uv(to, tri, bary);
+        if reads_slot(m, SLOT_OCCLUSION, uv_o) {
+            let strength = unit(to.transform_u.w);
+            s.occlusion = unit(1.0 + strength * (sample_texture(to, uv_o, false).r - 1.0));
         }
         s.base_color = bounded(base, 1.0);
         s.roughness = roughness;

@@ -6,12 +6,13 @@ use glam::{Vec3, Vec4};
 use crate::gbuffer::GSample;
 
 /// As `shaded`: the radiance the image shows at surface `s`, reflections left out: `direct`,
-/// the emission, and the diffuse albedo times `E / pi + (1 - conf) AV ambient`, where
-/// `irradiance` holds the gather's irradiance E (rgb) and coverage conf (w).
+/// the emission, and the diffuse albedo times `occlusion (E / pi + (1 - conf) AV ambient)`,
+/// where `irradiance` holds the gather's irradiance E (rgb) and coverage conf (w).
 pub fn shaded(s: &GSample, direct: Vec3, visibility: f32, irradiance: Vec4, ambient: Vec3) -> Vec3 {
     let confidence = irradiance.w.clamp(0.0, 1.0);
     let albedo = (1.0 - s.metallic) * s.base_color;
     let reflected = albedo
+        * s.occlusion
         * (irradiance.truncate() / std::f32::consts::PI
             + (1.0 - confidence) * visibility * ambient);
     direct + reflected + s.emissive

@@ -1,11 +1,11 @@
 //! CPU reference of `wgsl/resolve.wgsl`: visibility words to G-buffer samples.
 
-use glam::{Vec2, Vec3, Vec4Swizzles};
+use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, VIS_EMPTY};
-use crate::scene::{Material, Scene, Texture};
+use crate::scene::{Filter, Material, Scene, Texture, TextureRef, Wrap};
 
 fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
@@ -19,25 +19,100 @@ fn texel(t: &Texture, x: u32, y: u32, srgb: bool) -> Vec3 {
     }))
 }
 
-/// As `sample_texture`: bilinear, repeating; sRGB texels decoded before they are filtered.
-pub(crate) fn sample_texture(t: &Texture, uv: Vec2, srgb: bool) -> Vec3 {
+/// As `wrap_reduce`: a coordinate brought into one period of its wrap mode.
+fn wrap_reduce(u: f32, mode: Wrap) -> f32 {
+    match mode {
+        Wrap::ClampToEdge => u.clamp(0.0, 1.0),
+        Wrap::MirroredRepeat => u - 2.0 * (u * 0.5).floor(),
+        Wrap::Repeat => u - u.floor(),
+    }
+}
+
+/// As `wrap_index`: texel index `i` (in [-1, 2n]) as the wrap mode reads it.
+fn wrap_index(i: i32, n: i32, mode: Wrap) -> u32 {
+    match mode {
+        Wrap::ClampToEdge => i.clamp(0, n - 1) as u32,
+        Wrap::MirroredRepeat if i < 0 => 0,
+        Wrap::MirroredRepeat if i < n => i as u32,
+        Wrap::MirroredRepeat if i - n < n => (n - 1 - (i - n)) as u32,
+        Wrap::MirroredRepeat => 0,
+        Wrap::Repeat => ((i % n + n) % n) as u32,
+    }
+}
+
+/// As `sample_texture`: texture `t` at `uv` (already transformed), wrapped and filtered as
+/// `slot` says; sRGB texels decoded before they are filtered.
+pub(crate) fn sample_texture(t: &Texture, slot: &TextureRef, uv: Vec2, srgb: bool) -> Vec3 {
     let size = Vec2::new(t.width as f32, t.height as f32);
-    let p = uv.fract_gl() * size - 0.5;
-    let f = p.fract_gl();
+    let r = Vec2::new(wrap_reduce(uv.x, slot.wrap_s), wrap_reduce(uv.y, slot.wrap_t));
     let (w, h) = (t.width as i32, t.height as i32);
+    if slot.filter == Filter::Nearest {
+        let i = (r * size).floor();
+        let (x, y) =
+            (wrap_index(i.x as i32, w, slot.wrap_s), wrap_index(i.y as i32, h, slot.wrap_t));
+        return texel(t, x, y, srgb);
+    }
+    let p = r * size - 0.5;
+    let f = p - p.floor();
     let i0 = p.floor();
-    let x0 = ((i0.x as i32 % w + w) % w) as u32;
-    let y0 = ((i0.y as i32 % h + h) % h) as u32;
-    let x1 = (x0 + 1) % t.width;
-    let y1 = (y0 + 1) % t.height;
+    let (ix, iy) = (i0.x as i32, i0.y as i32);
+    let x0 = wrap_index(ix, w, slot.wrap_s);
+    let y0 = wrap_index(iy, h, slot.wrap_t);
+    let x1 = wrap_index(ix + 1, w, slot.wrap_s);
+    let y1 = wrap_index(iy + 1, h, slot.wrap_t);
     let top = texel(t, x0, y0, srgb).lerp(texel(t, x1, y0, srgb), f.x);
     let bottom = texel(t, x0, y1, srgb).lerp(texel(t, x1, y1, srgb), f.x);
     top.lerp(bottom, f.y)
 }
 
-/// What a material gives a surface point at texture coordinate `uv`: its factors times its
-/// textures, bounded (as the resolve does), the reflectivity taken per texel as
-/// metallic x (1 - roughness) where a metallic-roughness texture is given.
+/// A point inside a triangle: the scene, the triangle's vertex indices and the point's
+/// barycentrics.
+#[derive(Clone, Copy)]
+pub(crate) struct Corners<'a> {
+    pub scene: &'a Scene,
+    pub tri: [usize; 3],
+    pub bary: Vec3,
+}
+
+impl Corners<'_> {
+    /// As `vertex_uv`: vertex `i`'s coordinates in set 0 or 1 (zero where there are none).
+    fn vertex_uv(&self, i: usize, set: u32) -> Vec2 {
+        let uvs = if set == 0 { &self.scene.uvs } else { &self.scene.uvs1 };
+        uvs.get(i).copied().filter(|t| t.is_finite()).unwrap_or(Vec2::ZERO)
+    }
+
+    fn interpolate<T>(&self, f: impl Fn(usize) -> T) -> T
+    where
+        T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
+        let [a, b, c] = self.tri;
+        f(a) * self.bary.x + f(b) * self.bary.y + f(c) * self.bary.z
+    }
+
+    /// As `slot_uv`: the point's coordinates as `slot` reads them.
+    fn slot_uv(&self, slot: &TextureRef) -> Vec2 {
+        let uv = self.interpolate(|i| self.vertex_uv(i, slot.tex_coord));
+        let m = slot.transform;
+        // Summed as the kernel sums (dot of the rows, then the translation).
+        Vec2::new(
+            m.matrix2.x_axis.x * uv.x + m.matrix2.y_axis.x * uv.y + m.translation.x,
+            m.matrix2.x_axis.y * uv.x + m.matrix2.y_axis.y * uv.y + m.translation.y,
+        )
+    }
+
+    /// The texture and coordinates `slot` reads at this point, when it reads one (the texture
+    /// exists and the coordinates are finite and moderate).
+    fn read(&self, slot: Option<TextureRef>) -> Option<(&Texture, TextureRef, Vec2)> {
+        let slot = slot?;
+        let t = self.scene.textures.get(slot.texture as usize)?;
+        let uv = self.slot_uv(&slot);
+        uv.abs().cmplt(Vec2::splat(1e6)).all().then_some((t, slot, uv))
+    }
+}
+
+/// What a material gives a surface point: its factors times its textures, bounded (as the
+/// resolve does), the reflectivity taken per texel as metallic x (1 - roughness) where a
+/// metallic-roughness texture is given.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MaterialSample {
     pub base_color: Vec3,
@@ -45,29 +120,32 @@ pub(crate) struct MaterialSample {
     pub roughness: f32,
     pub metallic: f32,
     pub reflectivity: f32,
+    pub occlusion: f32,
 }
 
-pub(crate) fn material_at(scene: &Scene, m: &Material, uv: Vec2) -> MaterialSample {
-    let texture = |t: Option<u32>| {
-        t.and_then(|t| scene.textures.get(t as usize))
-            .filter(|_| uv.abs().cmplt(Vec2::splat(1e6)).all())
-    };
+pub(crate) fn material_at(m: &Material, at: &Corners<'_>) -> MaterialSample {
     let mut base = m.base_color.xyz();
-    if let Some(t) = texture(m.base_color_texture) {
-        base *= sample_texture(t, uv, true);
+    if let Some((t, slot, uv)) = at.read(m.base_color_texture) {
+        base *= sample_texture(t, &slot, uv, true);
     }
     let mut emissive = m.emissive;
-    if let Some(t) = texture(m.emissive_texture) {
-        emissive *= sample_texture(t, uv, true);
+    if let Some((t, slot, uv)) = at.read(m.emissive_texture) {
+        emissive *= sample_texture(t, &slot, uv, true);
     }
     let mut roughness = m.roughness.clamp(0.0, 1.0);
     let mut metallic = m.metallic.clamp(0.0, 1.0);
     let mut reflectivity = m.reflectivity.clamp(0.0, 1.0);
-    if let Some(t) = texture(m.metallic_roughness_texture) {
-        let mr = sample_texture(t, uv, false);
+    if let Some((t, slot, uv)) = at.read(m.metallic_roughness_texture) {
+        let mr = sample_texture(t, &slot, uv, false);
         roughness = (roughness * mr.y).clamp(0.0, 1.0);
         metallic = (metallic * mr.z).clamp(0.0, 1.0);
         reflectivity = metallic * (1.0 - roughness);
+    }
+    let mut occlusion = 1.0;
+    if let Some((t, slot, uv)) = at.read(m.occlusion_texture) {
+        let strength = m.occlusion_strength.clamp(0.0, 1.0);
+        occlusion =
+            (1.0 + strength * (sample_texture(t, &slot, uv, false).x - 1.0)).clamp(0.0, 1.0);
     }
     MaterialSample {
         base_color: base.clamp(Vec3::ZERO, Vec3::ONE),
@@ -75,7 +153,50 @@ pub(crate) fn material_at(scene: &Scene, m: &Material, uv: Vec2) -> MaterialSamp
         roughness,
         metallic,
         reflectivity,
+        occlusion,
     }
+}
+
+/// As `normal_mapped`: the unit normal `n` turned by material `m`'s normal texture at the
+/// point (the frame of the interpolated vertex tangents, or where they are missing the
+/// triangle's own texture-space frame); `n` where `m` has no normal texture or no frame exists.
+pub(crate) fn normal_mapped(m: &Material, at: &Corners<'_>, n: Vec3) -> Vec3 {
+    let Some((texture, slot, uv)) = at.read(m.normal_texture) else { return n };
+    let c = sample_texture(texture, &slot, uv, false);
+    let scene = at.scene;
+    let tangent = |i: usize| scene.tangents.get(i).copied().filter(|t| t.is_finite());
+    let t0 = tangent(at.tri[0]).unwrap_or(Vec4::ZERO);
+    let mut t = at.interpolate(|i| tangent(i).unwrap_or(Vec4::ZERO).xyz());
+    let mut sign = if t0.w < 0.0 { -1.0 } else { 1.0 };
+    if !(t.dot(t) > 1e-12 && t.dot(t) <= 3e38) {
+        let [i0, i1, i2] = at.tri;
+        let a = at.vertex_uv(i0, slot.tex_coord);
+        let (d1, d2) = (at.vertex_uv(i1, slot.tex_coord) - a, at.vertex_uv(i2, slot.tex_coord) - a);
+        let p = &scene.positions;
+        let (e1, e2) = (p[i1] - p[i0], p[i2] - p[i0]);
+        let r = d1.x * d2.y - d2.x * d1.y;
+        if r.is_nan() || r.abs() <= 1e-20 {
+            return n;
+        }
+        t = (e1 * d2.y - e2 * d1.y) / r;
+        let b = (e2 * d1.x - e1 * d2.x) / r;
+        sign = if n.cross(t).dot(b) < 0.0 { 1.0 } else { -1.0 };
+    }
+    t -= n * n.dot(t);
+    let tl = t.length();
+    if !(tl > 1e-12 && tl <= 3e38) {
+        return n;
+    }
+    t /= tl;
+    let b = n.cross(t) * sign;
+    let v = c * 2.0 - 1.0;
+    let scale = m.normal_scale;
+    let mapped = t * (v.x * scale) + b * (v.y * scale) + n * v.z;
+    let ml = mapped.length();
+    if !(ml > 1e-12 && ml <= 3e38) {
+        return n;
+    }
+    mapped / ml
 }
 
 /// The G-buffer sample of visibility word `word` at pixel (x, y).
@@ -124,6 +245,11 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
         scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
     let nl = n_interp.length();
     let mut n = if nl > 1e-12 && nl <= 3e38 { n_interp / nl } else { geo };
+    let at = Corners { scene, tri: [i0, i1, i2], bary };
+    let mid = scene.triangle_materials[id as usize];
+    if let Some(m) = scene.materials.get(mid as usize) {
+        n = normal_mapped(m, &at, n);
+    }
     if geo.dot(to_eye) < 0.0 {
         geo = -geo;
         n = -n;
@@ -134,16 +260,15 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
     if n.dot(n).is_nan() || n.dot(n) <= 0.5 {
         n = geo;
     }
-    let mid = scene.triangle_materials[id as usize];
     let mut s = GSample { depth: d, normal: n, material: mid, ..GSample::default() };
     if let Some(m) = scene.materials.get(mid as usize) {
-        let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
-        let at = material_at(scene, m, uv);
-        s.base_color = at.base_color;
-        s.roughness = at.roughness;
-        s.metallic = at.metallic;
-        s.reflectivity = at.reflectivity;
-        s.emissive = at.emissive;
+        let v = material_at(m, &at);
+        s.base_color = v.base_color;
+        s.roughness = v.roughness;
+        s.metallic = v.metallic;
+        s.reflectivity = v.reflectivity;
+        s.occlusion = v.occlusion;
+        s.emissive = v.emissive;
     }
     let pc = mat_mul(&f.prev_view_proj, world.extend(1.0).to_array());
     if pc.w > 1e-20 {
@@ -165,4 +290,37 @@ pub fn resolve(f: &FrameUniform, scene: &Scene, vis: &[u64]) -> Vec<GSample> {
         .flat_map(|y| (0..f.width).map(move |x| (x, y)))
         .map(|(x, y)| resolve_pixel(f, scene, vis[(y * f.width + x) as usize], x, y))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The wrap modes and filters on a 2x1 texture, black then white: texel centres at u = 1/4
+    /// and 3/4.
+    #[test]
+    fn wrap_modes_and_filters_read_the_texels_the_sampler_names() {
+        let t = Texture { width: 2, height: 1, rgba8: vec![0, 0, 0, 255, 255, 255, 255, 255] };
+        let read = |wrap_s, filter, u: f32| {
+            let slot = TextureRef { wrap_s, filter, ..TextureRef::new(0) };
+            sample_texture(&t, &slot, Vec2::new(u, 0.5), false).x
+        };
+        let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        // Repeat: 1.25 reads as 0.25; halfway between the last and the first texel, the mean.
+        assert!(near(read(Wrap::Repeat, Filter::Linear, 1.25), 0.0));
+        assert!(near(read(Wrap::Repeat, Filter::Linear, 1.0), 0.5));
+        // Clamp: past either edge the edge texel.
+        assert!(near(read(Wrap::ClampToEdge, Filter::Linear, 1.7), 1.0));
+        assert!(near(read(Wrap::ClampToEdge, Filter::Linear, -3.0), 0.0));
+        assert!(near(read(Wrap::ClampToEdge, Filter::Linear, 1.0), 1.0));
+        // Mirrored: 1.25 reads as 0.75, 2.25 as 0.25; at 1.0 the white texel meets its mirror.
+        assert!(near(read(Wrap::MirroredRepeat, Filter::Linear, 1.25), 1.0));
+        assert!(near(read(Wrap::MirroredRepeat, Filter::Linear, 2.25), 0.0));
+        assert!(near(read(Wrap::MirroredRepeat, Filter::Linear, 1.0), 1.0));
+        assert!(near(read(Wrap::MirroredRepeat, Filter::Linear, -0.25), 0.0));
+        // Nearest: no blend between texels.
+        assert!(near(read(Wrap::Repeat, Filter::Nearest, 0.49), 0.0));
+        assert!(near(read(Wrap::Repeat, Filter::Nearest, 0.51), 1.0));
+        assert!(near(read(Wrap::Repeat, Filter::Linear, 0.5), 0.5));
+    }
 }

@@ -8,7 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use crate::scene::upload::GpuMaterial;
+use crate::scene::upload::{GpuMaterial, GpuTextureSlot};
 use crate::scene::{Camera, GpuLight};
 
 mod pyramid;
@@ -73,29 +73,20 @@ pub const MIRRORED: &[MirrorLayout] = &[
     ShadowFace::LAYOUT,
     GpuLight::LAYOUT,
     GpuMaterial::LAYOUT,
+    GpuTextureSlot::LAYOUT,
 ];
 
 mirrored!(
     GpuMaterial,
     "shared/material.wgsl",
     "Material",
-    [
-        base_color,
-        emissive,
-        roughness,
-        metallic,
-        reflectivity,
-        flags,
-        texture_offset,
-        texture_width,
-        texture_height,
-        emissive_offset,
-        emissive_width,
-        emissive_height,
-        metallic_roughness_offset,
-        metallic_roughness_width,
-        metallic_roughness_height
-    ]
+    [base_color, emissive, roughness, metallic, reflectivity, flags, slots]
+);
+mirrored!(
+    GpuTextureSlot,
+    "shared/material.wgsl",
+    "TextureSlot",
+    [offset, width, height, sampler, transform_u, transform_v]
 );
 mirrored!(
     GpuLight,

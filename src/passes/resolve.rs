@@ -44,6 +44,8 @@ impl Stage for ResolveStage {
                 (slot::TEXELS, &b.texels),
                 (slot::VIS, vis),
                 (slot::GBUFFER, gbuffer),
+                (slot::UVS1, &ctx.scene.uvs1),
+                (slot::TANGENTS, &ctx.scene.tangents),
             ];
             pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
         }

@@ -176,6 +176,13 @@ pub fn grid(triangles: u32) -> Scene {
 fn push(scene: &mut Scene, positions: &[Vec3], normals: &[Vec3], indices: &[u32], material: u32) {
     let uvs: Vec<Vec2> = Vec::new();
     scene
-        .push_mesh(MeshData { positions, normals, uvs: &uvs, indices, material })
+        .push_mesh(MeshData {
+            positions,
+            normals,
+            uvs: &uvs,
+            indices,
+            material,
+            ..MeshData::default()
+        })
         .expect("generated indices are in range");
 }

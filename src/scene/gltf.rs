@@ -1,20 +1,22 @@
 //! glTF 2.0 (`.gltf` and `.glb`, via the `gltf` crate): node transforms, every mesh and
-//! primitive, metallic-roughness materials with their base-colour, emissive and
-//! metallic-roughness textures (texture coordinate set 0, repeating, bilinear),
-//! `KHR_lights_punctual`, `KHR_materials_emissive_strength` and the first camera. Normal and
-//! occlusion textures, other coordinate sets and alpha modes are named in one warning.
+//! primitive, the metallic-roughness material in full (base colour, metallic-roughness,
+//! emissive, normal and occlusion textures, each with its sampler's wrap modes and
+//! magnification filter, its coordinate set 0 or 1 and `KHR_texture_transform`), tangents (the
+//! file's, or MikkTSpace's where a normal texture needs them), `KHR_lights_punctual`,
+//! `KHR_materials_emissive_strength` and the first camera. Alpha modes, coordinate sets above
+//! 1 and other extensions are named in one warning.
 //!
 //! Mirror reflectivity, which glTF does not have, is derived as `metallic * (1 - roughness)`.
 
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine2, Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::Mode;
 
 use super::{
-    Camera, Light, LightKind, Limits, MAX_TEXTURE_SIDE, Material, MeshData, Projection, Scene,
-    Texture,
+    Camera, Filter, Light, LightKind, Limits, MAX_TEXTURE_SIDE, Material, MeshData, Projection,
+    Scene, Texture, TextureRef, Wrap,
 };
 use crate::{Error, Result};
 
@@ -40,6 +42,106 @@ fn catch_quietly<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     QUIET.with(|q| q.set(false));
     result
+}
+
+/// The extensions the loader reads; any other the file uses is named in its warning.
+const READ_EXTENSIONS: [&str; 3] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", TRANSFORM];
+
+const TRANSFORM: &str = "KHR_texture_transform";
+
+/// `KHR_texture_transform` of one texture reference.
+#[derive(Clone, Copy, Debug, Default)]
+struct Transform {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+    tex_coord: Option<u32>,
+}
+
+impl Transform {
+    /// From the extension's JSON (normal and occlusion references, which the `gltf` crate
+    /// leaves as JSON); missing or malformed fields take their defaults.
+    fn from_json(value: Option<&serde_json::Value>) -> Transform {
+        let pair = |v: Option<&serde_json::Value>, default: [f32; 2]| {
+            v.and_then(|v| v.as_array())
+                .filter(|a| a.len() == 2)
+                .and_then(|a| Some([a[0].as_f64()? as f32, a[1].as_f64()? as f32]))
+                .unwrap_or(default)
+        };
+        let Some(v) = value else { return Transform { scale: [1.0; 2], ..Transform::default() } };
+        Transform {
+            offset: pair(v.get("offset"), [0.0; 2]),
+            rotation: v.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32,
+            scale: pair(v.get("scale"), [1.0; 2]),
+            tex_coord: v.get("texCoord").and_then(|t| t.as_u64()).map(|t| t.min(2) as u32),
+        }
+    }
+
+    /// The affine map of the extension: translation x rotation x scale, the rotation turning
+    /// coordinates counter-clockwise (its matrix's first column `(cos, sin)`).
+    fn affine(&self) -> Affine2 {
+        Affine2::from_scale_angle_translation(
+            Vec2::from(self.scale),
+            self.rotation,
+            Vec2::from(self.offset),
+        )
+    }
+}
+
+/// A texture reference of a material: the texture, its coordinate set and transform.
+struct Reference<'a> {
+    texture: gltf::texture::Texture<'a>,
+    tex_coord: u32,
+    transform: Transform,
+}
+
+impl<'a> Reference<'a> {
+    fn of(
+        texture: gltf::texture::Texture<'a>,
+        tex_coord: u32,
+        transform: Option<&serde_json::Value>,
+    ) -> Self {
+        Reference { texture, tex_coord, transform: Transform::from_json(transform) }
+    }
+
+    fn of_info(info: gltf::texture::Info<'a>) -> Self {
+        let transform = info.texture_transform().map_or(
+            Transform { scale: [1.0; 2], ..Transform::default() },
+            |t| Transform {
+                offset: t.offset(),
+                rotation: t.rotation(),
+                scale: t.scale(),
+                tex_coord: t.tex_coord(),
+            },
+        );
+        Reference { texture: info.texture(), tex_coord: info.tex_coord(), transform }
+    }
+
+    /// The slot reading scene texture `texture` through coordinate set `tex_coord`, with the
+    /// reference's sampler and transform.
+    fn slot(&self, texture: u32, tex_coord: u32) -> TextureRef {
+        use gltf::texture::{MagFilter, WrappingMode};
+        let sampler = self.texture.sampler();
+        let wrap = |w: WrappingMode| match w {
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let transform = self.transform.affine();
+        TextureRef {
+            texture,
+            wrap_s: wrap(sampler.wrap_s()),
+            wrap_t: wrap(sampler.wrap_t()),
+            filter: match sampler.mag_filter() {
+                Some(MagFilter::Nearest) => Filter::Nearest,
+                _ => Filter::Linear,
+            },
+            tex_coord,
+            // A transform that is not finite is left out rather than refused.
+            transform: if transform.is_finite() { transform } else { Affine2::IDENTITY },
+        }
+    }
 }
 
 /// Loads a `.gltf` or `.glb` file with its buffers and images.
@@ -70,48 +172,26 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
         .collect();
     let mut image_textures: Vec<Option<u32>> = vec![None; doc.images().len()];
     let mut texels_left = limits.texels;
-    // Material features the renderer does not read, with how many materials use each.
-    let mut unread: std::collections::BTreeMap<&str, usize> = Default::default();
+    // What the file uses that the renderer does not read, with how many materials use each.
+    let mut unread: std::collections::BTreeMap<String, usize> = Default::default();
     for m in doc.materials() {
-        let pbr = m.pbr_metallic_roughness();
-        let slots = [
-            ("a normal texture", m.normal_texture().is_some()),
-            ("an occlusion texture", m.occlusion_texture().is_some()),
-            (
-                "a second texture coordinate set",
-                [
-                    pbr.base_color_texture().map(|t| t.tex_coord()),
-                    pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
-                    m.emissive_texture().map(|t| t.tex_coord()),
-                ]
-                .into_iter()
-                .flatten()
-                .any(|set| set != 0),
-            ),
-            ("alpha blending or masking", m.alpha_mode() != gltf::material::AlphaMode::Opaque),
-        ];
-        for (what, used) in slots {
-            if used {
-                *unread.entry(what).or_default() += 1;
-            }
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            *unread.entry("alpha blending or masking".into()).or_default() += 1;
         }
     }
-    if !unread.is_empty() {
-        let list: Vec<String> = unread.iter().map(|(w, n)| format!("{w} ({n})")).collect();
-        scene.warnings.push(format!(
-            "materials use what the renderer does not read (rendered without it): {}",
-            list.join(", ")
-        ));
+    for ext in doc.extensions_used().filter(|e| !READ_EXTENSIONS.contains(e)) {
+        unread.insert(format!("the extension {ext}"), 0);
     }
+    let mut coordinate_sets_above_1 = 0;
     for m in doc.materials() {
         let name =
             m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_owned);
         let pbr = m.pbr_metallic_roughness();
         let in_use = m.index().is_some_and(|i| used.contains(&i));
         // Each image is decoded once, whichever slots and materials use it.
-        let mut texture = |info: Option<gltf::texture::Texture<'_>>| -> Result<Option<u32>> {
-            let Some(texture) = info.filter(|_| in_use) else { return Ok(None) };
-            let image = texture.source();
+        let mut slot = |reference: Option<Reference<'_>>| -> Result<Option<TextureRef>> {
+            let Some(reference) = reference.filter(|_| in_use) else { return Ok(None) };
+            let image = reference.texture.source();
             let i = image.index();
             if image_textures[i].is_none() {
                 let at = format!("images[{i}]");
@@ -120,12 +200,30 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
                 scene.textures.push(tex);
                 image_textures[i] = Some(scene.textures.len() as u32 - 1);
             }
-            Ok(image_textures[i])
+            let Some(texture) = image_textures[i] else { return Ok(None) };
+            let mut tex_coord = reference.transform.tex_coord.unwrap_or(reference.tex_coord);
+            if tex_coord > 1 {
+                coordinate_sets_above_1 += 1;
+                tex_coord = 0;
+            }
+            Ok(Some(reference.slot(texture, tex_coord)))
         };
-        let base_color_texture = texture(pbr.base_color_texture().map(|t| t.texture()))?;
-        let emissive_texture = texture(m.emissive_texture().map(|t| t.texture()))?;
+        let base_color_texture = slot(pbr.base_color_texture().map(Reference::of_info))?;
+        let emissive_texture = slot(m.emissive_texture().map(Reference::of_info))?;
         let metallic_roughness_texture =
-            texture(pbr.metallic_roughness_texture().map(|t| t.texture()))?;
+            slot(pbr.metallic_roughness_texture().map(Reference::of_info))?;
+        let normal = m.normal_texture();
+        let normal_texture = slot(
+            normal
+                .as_ref()
+                .map(|t| Reference::of(t.texture(), t.tex_coord(), t.extension_value(TRANSFORM))),
+        )?;
+        let occlusion = m.occlusion_texture();
+        let occlusion_texture = slot(
+            occlusion
+                .as_ref()
+                .map(|t| Reference::of(t.texture(), t.tex_coord(), t.extension_value(TRANSFORM))),
+        )?;
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
         let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
         scene.materials.push(Material {
@@ -137,9 +235,26 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
             roughness,
             metallic,
             metallic_roughness_texture,
+            normal_texture,
+            normal_scale: normal.as_ref().map_or(1.0, |t| t.scale()),
+            occlusion_texture,
+            occlusion_strength: occlusion.as_ref().map_or(1.0, |t| t.strength().clamp(0.0, 1.0)),
             reflectivity: metallic * (1.0 - roughness),
             double_sided: m.double_sided(),
         });
+    }
+    if coordinate_sets_above_1 > 0 {
+        unread.insert("texture coordinate sets above 1 (read as set 0)".into(), 0);
+    }
+    if !unread.is_empty() {
+        let list: Vec<String> = unread
+            .iter()
+            .map(|(w, n)| if *n > 0 { format!("{w} ({n})") } else { w.clone() })
+            .collect();
+        scene.warnings.push(format!(
+            "the file uses what the renderer does not read (rendered without it): {}",
+            list.join(", ")
+        ));
     }
     let default_material = scene.materials.len() as u32;
     let mut used_default = false;
@@ -175,6 +290,23 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
                 let uvs: Vec<Vec2> = reader
                     .read_tex_coords(0)
                     .map(|t| t.into_f32().map(Vec2::from).collect())
+                    .unwrap_or_default();
+                let uvs1: Vec<Vec2> = reader
+                    .read_tex_coords(1)
+                    .map(|t| t.into_f32().map(Vec2::from).collect())
+                    .unwrap_or_default();
+                // A mirroring transform turns the bitangent: the sign follows the determinant.
+                let handedness = world.determinant().signum();
+                let tangents: Vec<Vec4> = reader
+                    .read_tangents()
+                    .map(|it| {
+                        it.map(|t| {
+                            let v = (Mat3::from_mat4(world) * Vec3::new(t[0], t[1], t[2]))
+                                .normalize_or_zero();
+                            v.extend(if t[3] < 0.0 { -handedness } else { handedness })
+                        })
+                        .collect()
+                    })
                     .unwrap_or_default();
                 let raw: Vec<u32> = match reader.read_indices() {
                     Some(i) => i.into_u32().collect(),
@@ -221,11 +353,46 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
                         format!("the scene's triangles exceed the limit of {}", limits.triangles),
                     ));
                 }
+                // A normal texture without tangents in the file: MikkTSpace's, from the
+                // coordinate set the texture reads (else each triangle's own frame is used).
+                let normal_set = scene
+                    .materials
+                    .get(material as usize)
+                    .and_then(|m| m.normal_texture)
+                    .map(|t| t.tex_coord);
+                let generated = match normal_set {
+                    Some(set) if tangents.is_empty() => {
+                        let (main, other) = if set == 1 { (&uvs1, &uvs) } else { (&uvs, &uvs1) };
+                        let v = super::tangents::Vertices {
+                            positions: positions.clone(),
+                            normals: normals.clone(),
+                            uvs: main.clone(),
+                            uvs_other: other.clone(),
+                            tangents: Vec::new(),
+                        };
+                        catch_quietly(|| super::tangents::generate(&v, &indices))
+                            .ok()
+                            .flatten()
+                            .map(|(v, indices)| {
+                                let (main, other) = if set == 1 {
+                                    (v.uvs_other, v.uvs)
+                                } else {
+                                    (v.uvs, v.uvs_other)
+                                };
+                                (v.positions, v.normals, main, other, v.tangents, indices)
+                            })
+                    }
+                    _ => None,
+                };
+                let (positions, normals, uvs, uvs1, tangents, indices) =
+                    generated.unwrap_or((positions, normals, uvs, uvs1, tangents, indices));
                 scene
                     .push_mesh(MeshData {
                         positions: &positions,
                         normals: &normals,
                         uvs: &uvs,
+                        uvs1: &uvs1,
+                        tangents: &tangents,
                         indices: &indices,
                         material,
                     })

@@ -7,11 +7,12 @@ pub mod camera;
 pub mod gltf;
 pub mod lighting;
 pub mod obj;
+mod tangents;
 pub mod upload;
 
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Affine2, Vec2, Vec3, Vec4};
 
 pub use camera::{Camera, Projection};
 pub use lighting::{GpuLight, SceneInfo};
@@ -21,24 +22,91 @@ use crate::{Error, Result};
 /// Largest texture side accepted from a scene file.
 pub const MAX_TEXTURE_SIDE: u32 = 8192;
 
-/// A surface material (metallic-roughness model).
+/// How a texture's coordinates outside [0, 1] are read, per axis (glTF's sampler wrap modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    /// The texture tiles.
+    #[default]
+    Repeat,
+    /// The edge texel continues.
+    ClampToEdge,
+    /// The texture tiles, every other tile mirrored.
+    MirroredRepeat,
+}
+
+/// How texels are filtered: glTF's magnification filter (the renderer keeps no mip levels, so
+/// a minifying read filters the same way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Bilinear between the four nearest texels.
+    #[default]
+    Linear,
+    /// The nearest texel.
+    Nearest,
+}
+
+/// How a material reads one of its textures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`Scene::textures`].
+    pub texture: u32,
+    /// Wrap mode across u (`s`).
+    pub wrap_s: Wrap,
+    /// Wrap mode across v (`t`).
+    pub wrap_t: Wrap,
+    /// Texel filter.
+    pub filter: Filter,
+    /// Which texture coordinate set: 0 ([`Scene::uvs`]) or 1 ([`Scene::uvs1`]).
+    pub tex_coord: u32,
+    /// Applied to the coordinates before the lookup (`KHR_texture_transform`: translation x
+    /// rotation x scale); identity by default.
+    pub transform: Affine2,
+}
+
+impl TextureRef {
+    /// Texture `texture` read repeating and bilinear through coordinate set 0, untransformed.
+    pub fn new(texture: u32) -> TextureRef {
+        TextureRef {
+            texture,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            filter: Filter::Linear,
+            tex_coord: 0,
+            transform: Affine2::IDENTITY,
+        }
+    }
+}
+
+/// A surface material (the glTF 2.0 metallic-roughness model).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name from the file, for messages.
     pub name: String,
     /// Linear base colour (rgb) and opacity (a).
     pub base_color: Vec4,
-    /// Index into [`Scene::textures`] of the base-colour texture (sRGB encoded), if any.
-    pub base_color_texture: Option<u32>,
+    /// The base-colour texture (sRGB encoded; multiplies `base_color`), if any.
+    pub base_color_texture: Option<TextureRef>,
     /// Emitted radiance, linear rgb.
     pub emissive: Vec3,
-    /// Index into [`Scene::textures`] of the emissive texture (sRGB encoded; multiplies
-    /// `emissive`), if any.
-    pub emissive_texture: Option<u32>,
-    /// Index into [`Scene::textures`] of the metallic-roughness texture (linear; green
-    /// multiplies `roughness`, blue `metallic`), if any. With one, the reflectivity is taken
-    /// per texel as metallic x (1 - roughness), the rule glTF materials follow.
-    pub metallic_roughness_texture: Option<u32>,
+    /// The emissive texture (sRGB encoded; multiplies `emissive`), if any.
+    pub emissive_texture: Option<TextureRef>,
+    /// The metallic-roughness texture (linear; green multiplies `roughness`, blue `metallic`),
+    /// if any. With one, the reflectivity is taken per texel as metallic x (1 - roughness), the
+    /// rule glTF materials follow.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// The tangent-space normal texture (linear, `2 c - 1` per channel), if any. It turns the
+    /// interpolated normal in the frame of the vertex tangents ([`Scene::tangents`]; where a
+    /// vertex has none, the triangle's own texture-space frame).
+    pub normal_texture: Option<TextureRef>,
+    /// Scales the normal texture's x and y (glTF `normalTexture.scale`).
+    pub normal_scale: f32,
+    /// The occlusion texture (linear, red channel), if any: it multiplies the light a surface
+    /// reflects diffusely from indirect light (the gathered radiosity and the ambient term,
+    /// which the ambient obscurance darkens too) by `1 + strength (red - 1)`, as glTF asks;
+    /// direct light is left as it is. The ground truth applies it to its indirect bounce.
+    pub occlusion_texture: Option<TextureRef>,
+    /// How strongly the occlusion texture applies, in [0, 1] (glTF `occlusionTexture.strength`).
+    pub occlusion_strength: f32,
     /// Perceptual roughness in [0, 1].
     pub roughness: f32,
     /// Metalness in [0, 1].
@@ -47,6 +115,20 @@ pub struct Material {
     pub reflectivity: f32,
     /// Both faces are visible; otherwise back faces are culled.
     pub double_sided: bool,
+}
+
+impl Material {
+    /// The texture slots in the order the GPU material holds them (base colour, emissive,
+    /// metallic-roughness, normal, occlusion).
+    pub fn texture_slots(&self) -> [Option<TextureRef>; 5] {
+        [
+            self.base_color_texture,
+            self.emissive_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture,
+            self.occlusion_texture,
+        ]
+    }
 }
 
 /// `name` (a path a scene file gives, relative to its `folder`) as a file that may be read: it
@@ -106,8 +188,9 @@ impl Default for Limits {
 pub const MAX_RADIANCE: f32 = 1e20;
 
 impl Material {
-    /// Checks the factors: colour, roughness, metallic and reflectivity finite in [0, 1],
-    /// emission finite, >= 0 and at most [`MAX_RADIANCE`].
+    /// Checks the factors: colour, roughness, metallic, reflectivity and occlusion strength
+    /// finite in [0, 1], emission finite, >= 0 and at most [`MAX_RADIANCE`], a finite normal
+    /// scale; texture slots read coordinate set 0 or 1 through finite transforms.
     pub fn validate(&self) -> Result<()> {
         let bad =
             |what: &str| Err(Error::InvalidScene(format!("material `{}`: {what}", self.name)));
@@ -119,6 +202,7 @@ impl Material {
             ("roughness", self.roughness),
             ("metallic", self.metallic),
             ("reflectivity", self.reflectivity),
+            ("occlusion strength", self.occlusion_strength),
         ] {
             if !unit(v) {
                 return bad(&format!("{name} {v} must lie in [0, 1]"));
@@ -129,6 +213,20 @@ impl Material {
                 "emission {} must be finite, >= 0 and at most {MAX_RADIANCE:e}",
                 self.emissive
             ));
+        }
+        if !self.normal_scale.is_finite() {
+            return bad(&format!("normal scale {} must be finite", self.normal_scale));
+        }
+        for slot in self.texture_slots().into_iter().flatten() {
+            if slot.tex_coord > 1 {
+                return bad(&format!(
+                    "texture coordinate set {} (sets 0 and 1 are read)",
+                    slot.tex_coord
+                ));
+            }
+            if !slot.transform.is_finite() {
+                return bad("a texture transform that is not finite");
+            }
         }
         Ok(())
     }
@@ -143,6 +241,10 @@ impl Default for Material {
             emissive: Vec3::ZERO,
             emissive_texture: None,
             metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
             roughness: 0.8,
             metallic: 0.0,
             reflectivity: 0.0,
@@ -219,6 +321,13 @@ pub struct Scene {
     pub normals: Vec<Vec3>,
     /// Texture coordinates (zero where the file has none).
     pub uvs: Vec<Vec2>,
+    /// The second texture coordinate set: empty when no vertex has one, else one per position
+    /// (zero where the file has none).
+    pub uvs1: Vec<Vec2>,
+    /// Tangents (xyz) with the bitangent's sign (w), for normal textures: empty when no vertex
+    /// has one, else one per position (zero where there is none: the triangle's own
+    /// texture-space frame is used there).
+    pub tangents: Vec<Vec4>,
     /// Triangles, three vertex indices each.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
@@ -238,6 +347,7 @@ pub struct Scene {
 }
 
 /// One mesh to append with [`Scene::push_mesh`].
+#[derive(Default)]
 pub struct MeshData<'a> {
     /// Positions (already in world space).
     pub positions: &'a [Vec3],
@@ -245,6 +355,10 @@ pub struct MeshData<'a> {
     pub normals: &'a [Vec3],
     /// Texture coordinates, empty or one per position.
     pub uvs: &'a [Vec2],
+    /// The second texture coordinate set, empty or one per position.
+    pub uvs1: &'a [Vec2],
+    /// Tangents with the bitangent's sign, empty or one per position.
+    pub tangents: &'a [Vec4],
     /// Triangle indices into this mesh's own vertices.
     pub indices: &'a [u32],
     /// Material of every triangle.
@@ -289,7 +403,7 @@ impl Scene {
         self.triangles.len()
     }
 
-    /// Appends a mesh; missing normals and uvs become zero.
+    /// Appends a mesh; missing normals, coordinates and tangents become zero.
     pub fn push_mesh(&mut self, mesh: MeshData<'_>) -> Result<()> {
         let base = u32::try_from(self.positions.len())
             .map_err(|_| Error::InvalidScene("more than 2^32 vertices".into()))?;
@@ -316,6 +430,9 @@ impl Scene {
         } else {
             self.uvs.extend(std::iter::repeat_n(Vec2::ZERO, n));
         }
+        let before = base as usize;
+        extend_optional(&mut self.uvs1, mesh.uvs1, before, n);
+        extend_optional(&mut self.tangents, mesh.tangents, before, n);
         for t in mesh.indices.chunks_exact(3) {
             self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
             self.triangle_materials.push(mesh.material);
@@ -428,6 +545,13 @@ impl Scene {
                 self.uvs.len()
             )));
         }
+        for (name, len) in [("second uvs", self.uvs1.len()), ("tangents", self.tangents.len())] {
+            if len != 0 && len != n {
+                return Err(Error::InvalidScene(format!(
+                    "{n} positions but {len} {name} (none or one per position)"
+                )));
+            }
+        }
         if self.triangle_materials.len() != self.triangles.len() {
             return Err(Error::InvalidScene(format!(
                 "{} triangles but {} triangle materials",
@@ -458,9 +582,12 @@ impl Scene {
         }
         for m in &self.materials {
             m.validate()?;
-            let textures = [m.base_color_texture, m.emissive_texture, m.metallic_roughness_texture];
-            if let Some(t) =
-                textures.into_iter().flatten().find(|&t| t as usize >= self.textures.len())
+            if let Some(t) = m
+                .texture_slots()
+                .into_iter()
+                .flatten()
+                .map(|slot| slot.texture)
+                .find(|&t| t as usize >= self.textures.len())
             {
                 return Err(Error::InvalidScene(format!(
                     "material `{}` uses texture {t} but there are {} textures",
@@ -480,5 +607,17 @@ impl Scene {
             }
         }
         Ok(())
+    }
+}
+
+/// Appends `n` values of an attribute that only some meshes have: `data` when it has one per
+/// vertex, else zeros; zeros first for the `before` vertices of earlier meshes when this is the
+/// first mesh to have it, and nothing at all while no mesh has had it.
+fn extend_optional<T: Copy + Default>(all: &mut Vec<T>, data: &[T], before: usize, n: usize) {
+    if data.len() == n && n > 0 {
+        all.resize(before, T::default());
+        all.extend_from_slice(data);
+    } else if !all.is_empty() {
+        all.resize(before + n, T::default());
     }
 }

@@ -114,6 +114,7 @@ fn parse_within(
                 uvs: &uvs,
                 indices: &mesh.indices,
                 material,
+                ..MeshData::default()
             })
             .map_err(|e| Error::format(path, format!("object `{}`", model.name), e.to_string()))?;
     }
@@ -160,14 +161,13 @@ fn convert_material(
     Ok(Material {
         name: m.name.clone(),
         base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
-        base_color_texture,
-        emissive_texture: None,
-        metallic_roughness_texture: None,
+        base_color_texture: base_color_texture.map(super::TextureRef::new),
         emissive: Vec3::from(ke),
         roughness,
         metallic: 0.0,
         reflectivity: ks[0].max(ks[1]).max(ks[2]).clamp(0.0, 1.0),
         double_sided: true,
+        ..Material::default()
     })
 }
 

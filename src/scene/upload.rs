@@ -8,16 +8,39 @@
 //! | positions | `f32 x 3` per vertex |
 //! | normals | `f32 x 3` per vertex (zero: use the face normal) |
 //! | uvs | `f32 x 2` per vertex |
+//! | uvs1 (optional) | `f32 x 2` per vertex: the second coordinate set |
+//! | tangents (optional) | `f32 x 4` per vertex: tangent xyz, bitangent sign w (zero: none) |
 //! | indices | `u32 x 3` per triangle |
 //! | triangle_materials | `u32` per triangle |
-//! | materials | [`GpuMaterial`] (64 bytes) per material |
+//! | materials | [`GpuMaterial`] (288 bytes) per material |
 //! | texels | `u32` RGBA8 (sRGB, red in the low byte) per texel, all textures back to back |
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{GpuLight, Scene, SceneInfo};
+use super::{Filter, GpuLight, Material, Scene, SceneInfo, TextureRef, Wrap};
 use crate::gpu::storage_buffer_init;
 use crate::{Error, Result};
+
+/// How a material reads one texture. Mirrors `struct TextureSlot` in
+/// `wgsl/shared/material.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct GpuTextureSlot {
+    /// First texel in the texel buffer.
+    pub offset: u32,
+    /// Width in texels (0 without a texture).
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Bits 0-1: wrap across u, bits 2-3: wrap across v (0 repeat, 1 clamp to edge, 2
+    /// mirrored repeat); bit 4: nearest texel (else bilinear); bit 5: coordinate set 1.
+    pub sampler: u32,
+    /// The coordinate transform's first row (`u' = x u + y v + z`); w: the slot's scale (the
+    /// normal scale, the occlusion strength; 1 for the other slots).
+    pub transform_u: [f32; 4],
+    /// The coordinate transform's second row (`v' = x u + y v + z`); w unused.
+    pub transform_v: [f32; 4],
+}
 
 /// A material as the kernels read it. Mirrors `struct Material` in `wgsl/shared/material.wgsl`.
 #[repr(C)]
@@ -33,42 +56,88 @@ pub struct GpuMaterial {
     pub metallic: f32,
     /// Mirror reflectivity.
     pub reflectivity: f32,
-    /// Bit 0: double-sided; bit 1: base-colour texture; bit 2: emissive texture; bit 3:
-    /// metallic-roughness texture.
+    /// Bit 0: double-sided; bit `1 + k`: texture slot `k` is used (see [`SLOT_BASE_COLOR`]..).
     pub flags: u32,
-    /// First texel of the base-colour texture in the texel buffer.
-    pub texture_offset: u32,
-    /// Texture width (0 without a texture).
-    pub texture_width: u32,
-    /// Texture height.
-    pub texture_height: u32,
-    /// First texel of the emissive texture (sRGB; multiplies `emissive`).
-    pub emissive_offset: u32,
-    /// Emissive texture width.
-    pub emissive_width: u32,
-    /// Emissive texture height.
-    pub emissive_height: u32,
-    /// First texel of the metallic-roughness texture (linear; green: roughness, blue:
-    /// metallic; the reflectivity becomes metallic x (1 - roughness) per texel).
-    pub metallic_roughness_offset: u32,
-    /// Metallic-roughness texture width.
-    pub metallic_roughness_width: u32,
-    /// Metallic-roughness texture height.
-    pub metallic_roughness_height: u32,
     /// Padding.
-    pub _pad: [u32; 4],
+    pub _pad: u32,
+    /// The texture slots: base colour (sRGB), emissive (sRGB), metallic-roughness (linear;
+    /// green: roughness, blue: metallic; the reflectivity becomes metallic x (1 - roughness)
+    /// per texel), normal (linear, tangent space), occlusion (linear, red).
+    pub slots: [GpuTextureSlot; 5],
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuTextureSlot>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 288);
 
 /// [`GpuMaterial::flags`] bit: both faces visible.
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
-/// [`GpuMaterial::flags`] bit: has a base-colour texture.
-pub const MATERIAL_TEXTURED: u32 = 2;
-/// [`GpuMaterial::flags`] bit: has an emissive texture.
-pub const MATERIAL_EMISSIVE_TEXTURED: u32 = 4;
-/// [`GpuMaterial::flags`] bit: has a metallic-roughness texture.
-pub const MATERIAL_METALLIC_ROUGHNESS_TEXTURED: u32 = 8;
+/// Index of the base-colour texture in [`GpuMaterial::slots`].
+pub const SLOT_BASE_COLOR: usize = 0;
+/// Index of the emissive texture.
+pub const SLOT_EMISSIVE: usize = 1;
+/// Index of the metallic-roughness texture.
+pub const SLOT_METALLIC_ROUGHNESS: usize = 2;
+/// Index of the normal texture.
+pub const SLOT_NORMAL: usize = 3;
+/// Index of the occlusion texture.
+pub const SLOT_OCCLUSION: usize = 4;
+
+/// The [`GpuMaterial::flags`] bit that says texture slot `slot` is used.
+pub const fn slot_flag(slot: usize) -> u32 {
+    2 << slot
+}
+
+impl GpuTextureSlot {
+    /// `slot` as the kernels read it, its texture placed at `(offset, width, height)`, with
+    /// the slot's `scale` (normal scale, occlusion strength).
+    pub fn new(slot: &TextureRef, (offset, width, height): (u32, u32, u32), scale: f32) -> Self {
+        let wrap = |w: Wrap| match w {
+            Wrap::Repeat => 0,
+            Wrap::ClampToEdge => 1,
+            Wrap::MirroredRepeat => 2,
+        };
+        let m = slot.transform;
+        GpuTextureSlot {
+            offset,
+            width,
+            height,
+            sampler: wrap(slot.wrap_s)
+                | wrap(slot.wrap_t) << 2
+                | u32::from(slot.filter == Filter::Nearest) << 4
+                | u32::from(slot.tex_coord == 1) << 5,
+            transform_u: [m.matrix2.x_axis.x, m.matrix2.y_axis.x, m.translation.x, scale],
+            transform_v: [m.matrix2.x_axis.y, m.matrix2.y_axis.y, m.translation.y, 0.0],
+        }
+    }
+}
+
+impl GpuMaterial {
+    /// `m` as the kernels read it, its textures placed as `placed` says (offset, width and
+    /// height of each of the scene's textures in the texel buffer).
+    pub fn new(m: &Material, placed: &[(u32, u32, u32)]) -> GpuMaterial {
+        let mut g = GpuMaterial {
+            base_color: m.base_color.to_array(),
+            emissive: m.emissive.to_array(),
+            roughness: m.roughness,
+            metallic: m.metallic,
+            reflectivity: m.reflectivity,
+            flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+            ..GpuMaterial::default()
+        };
+        for (k, slot) in m.texture_slots().iter().enumerate() {
+            if let Some(slot) = slot {
+                let scale = match k {
+                    SLOT_NORMAL => m.normal_scale,
+                    SLOT_OCCLUSION => m.occlusion_strength,
+                    _ => 1.0,
+                };
+                g.flags |= slot_flag(k);
+                g.slots[k] = GpuTextureSlot::new(slot, placed[slot.texture as usize], scale);
+            }
+        }
+        g
+    }
+}
 
 /// The host engine's own buffers, for [`SceneBuffers::import`]. Each needs `STORAGE` usage and
 /// the byte layout in this module's documentation.
@@ -80,6 +149,11 @@ pub struct ImportedBuffers {
     pub normals: wgpu::Buffer,
     /// Texture coordinates.
     pub uvs: wgpu::Buffer,
+    /// The second texture-coordinate set (`f32 x 2` per vertex), if any material reads it.
+    pub uvs1: Option<wgpu::Buffer>,
+    /// Tangents with the bitangent's sign (`f32 x 4` per vertex; zero: the triangle's own
+    /// texture-space frame), for normal textures. Without it every triangle uses its own.
+    pub tangents: Option<wgpu::Buffer>,
     /// Indices.
     pub indices: wgpu::Buffer,
     /// Per-triangle material ids.
@@ -103,6 +177,10 @@ pub struct SceneBuffers {
     pub(crate) info: SceneInfo,
     /// [`GpuLight`] per light (one zeroed light when there is none, so it binds).
     pub(crate) lights: wgpu::Buffer,
+    /// The second coordinate set, or 16 zero bytes when the scene has none.
+    pub(crate) uvs1: wgpu::Buffer,
+    /// The tangents, or 16 zero bytes when the scene has none.
+    pub(crate) tangents: wgpu::Buffer,
 }
 
 /// The most triangles a scene may have: the shaders address the index buffer (three u32 per
@@ -128,34 +206,8 @@ impl SceneBuffers {
                 tex.rgba8.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
             );
         }
-        let mut materials = Vec::with_capacity(scene.materials.len());
-        for m in &scene.materials {
-            let mut g = GpuMaterial {
-                base_color: m.base_color.to_array(),
-                emissive: m.emissive.to_array(),
-                roughness: m.roughness,
-                metallic: m.metallic,
-                reflectivity: m.reflectivity,
-                flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
-                ..GpuMaterial::default()
-            };
-            if let Some(t) = m.base_color_texture {
-                g.flags |= MATERIAL_TEXTURED;
-                (g.texture_offset, g.texture_width, g.texture_height) = placed[t as usize];
-            }
-            if let Some(t) = m.emissive_texture {
-                g.flags |= MATERIAL_EMISSIVE_TEXTURED;
-                (g.emissive_offset, g.emissive_width, g.emissive_height) = placed[t as usize];
-            }
-            if let Some(t) = m.metallic_roughness_texture {
-                g.flags |= MATERIAL_METALLIC_ROUGHNESS_TEXTURED;
-                let (offset, width, height) = placed[t as usize];
-                g.metallic_roughness_offset = offset;
-                g.metallic_roughness_width = width;
-                g.metallic_roughness_height = height;
-            }
-            materials.push(g);
-        }
+        let materials: Vec<GpuMaterial> =
+            scene.materials.iter().map(|m| GpuMaterial::new(m, &placed)).collect();
         let positions: Vec<f32> = scene.positions.iter().flat_map(|p| p.to_array()).collect();
         let normals: Vec<f32> = scene
             .normals
@@ -166,6 +218,16 @@ impl SceneBuffers {
             .uvs
             .iter()
             .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 2] })
+            .collect();
+        let uvs1: Vec<f32> = scene
+            .uvs1
+            .iter()
+            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 2] })
+            .collect();
+        let tangents: Vec<f32> = scene
+            .tangents
+            .iter()
+            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 4] })
             .collect();
         let indices: Vec<u32> = scene.triangles.iter().flatten().copied().collect();
         let check = |what: &str, bytes: usize| -> Result<()> {
@@ -181,6 +243,7 @@ impl SceneBuffers {
             Ok(())
         };
         check("positions", positions.len() * 4)?;
+        check("tangents", tangents.len() * 4)?;
         check("indices", indices.len() * 4)?;
         check("texels", texels.len() * 4)?;
         let count = |n: usize, what: &str| {
@@ -201,6 +264,16 @@ impl SceneBuffers {
                 bytemuck::cast_slice(&normals),
             ),
             uvs: storage_buffer_init(device, "deep-gbuffer.scene.uvs", bytemuck::cast_slice(&uvs)),
+            uvs1: (!uvs1.is_empty()).then(|| {
+                storage_buffer_init(device, "deep-gbuffer.scene.uvs1", bytemuck::cast_slice(&uvs1))
+            }),
+            tangents: (!tangents.is_empty()).then(|| {
+                storage_buffer_init(
+                    device,
+                    "deep-gbuffer.scene.tangents",
+                    bytemuck::cast_slice(&tangents),
+                )
+            }),
             indices: storage_buffer_init(
                 device,
                 "deep-gbuffer.scene.indices",
@@ -226,7 +299,7 @@ impl SceneBuffers {
             material_count: count(scene.materials.len(), "materials")?,
         };
         let info = SceneInfo::of(scene);
-        Ok(SceneBuffers { lights: light_buffer(device, &info), b, info })
+        Ok(SceneBuffers::new(device, b, info))
     }
 
     /// Uses a host engine's buffers as they are (no copy), after checking their sizes and usage
@@ -256,7 +329,7 @@ impl SceneBuffers {
             ("uvs", &b.uvs, v * 8),
             ("indices", &b.indices, t * 12),
             ("triangle_materials", &b.triangle_materials, t * 4),
-            ("materials", &b.materials, m * 64),
+            ("materials", &b.materials, m * std::mem::size_of::<GpuMaterial>() as u64),
             ("texels", &b.texels, 4),
         ] {
             if buffer.size() < needed {
@@ -269,7 +342,34 @@ impl SceneBuffers {
                 return Err(Error::ImportedBuffer { name, message: "lacks STORAGE usage".into() });
             }
         }
-        Ok(SceneBuffers { lights: light_buffer(device, &info), b: buffers, info })
+        for (name, buffer, needed) in [("uvs1", &b.uvs1, v * 8), ("tangents", &b.tangents, v * 16)]
+        {
+            let Some(buffer) = buffer else { continue };
+            if buffer.size() < needed {
+                return Err(Error::ImportedBuffer {
+                    name,
+                    message: format!("{} bytes, but the counts need {needed}", buffer.size()),
+                });
+            }
+            if !buffer.usage().contains(wgpu::BufferUsages::STORAGE) {
+                return Err(Error::ImportedBuffer { name, message: "lacks STORAGE usage".into() });
+            }
+        }
+        Ok(SceneBuffers::new(device, buffers, info))
+    }
+
+    fn new(device: &wgpu::Device, b: ImportedBuffers, info: SceneInfo) -> SceneBuffers {
+        // An attribute no vertex has binds as one zero element, which the resolve reads as none.
+        let or_empty = |buffer: &Option<wgpu::Buffer>, label: &str| {
+            buffer.clone().unwrap_or_else(|| storage_buffer_init(device, label, &[0u8; 16]))
+        };
+        SceneBuffers {
+            lights: light_buffer(device, &info),
+            uvs1: or_empty(&b.uvs1, "deep-gbuffer.scene.no-uvs1"),
+            tangents: or_empty(&b.tangents, "deep-gbuffer.scene.no-tangents"),
+            b,
+            info,
+        }
     }
 
     /// Lights, ambient and material facts.

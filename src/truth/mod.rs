@@ -236,6 +236,8 @@ struct Surface {
     roughness: f32,
     metallic: f32,
     reflectivity: f32,
+    /// Scales the indirect light the surface reflects diffusely (the occlusion texture).
+    occlusion: f32,
 }
 
 impl Surface {
@@ -249,6 +251,7 @@ impl Surface {
             roughness: s.roughness,
             metallic: s.metallic,
             reflectivity: s.reflectivity,
+            occlusion: s.occlusion,
         }
     }
 }
@@ -315,6 +318,12 @@ impl Tracer {
         let interp =
             scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
         let mut normal = interp.normalize_or(geo);
+        let at = crate::cpu::resolve::Corners { scene, tri: [i0, i1, i2], bary };
+        let m = scene.triangle_materials[id as usize];
+        let material = scene.materials.get(m as usize);
+        if let Some(material) = material {
+            normal = crate::cpu::resolve::normal_mapped(material, &at, normal);
+        }
         if geo.dot(dir) > 0.0 {
             normal = -normal;
         }
@@ -322,8 +331,7 @@ impl Tracer {
             // An interpolated normal facing away from the ray: use the face.
             normal = if geo.dot(dir) > 0.0 { -geo } else { geo };
         }
-        let m = scene.triangle_materials[id as usize];
-        let Some(material) = scene.materials.get(m as usize) else {
+        let Some(material) = material else {
             return Surface {
                 normal,
                 diffuse: Vec3::ZERO,
@@ -332,10 +340,10 @@ impl Tracer {
                 roughness: 1.0,
                 metallic: 0.0,
                 reflectivity: 0.0,
+                occlusion: 1.0,
             };
         };
-        let uv = scene.uvs[i0] * bary.x + scene.uvs[i1] * bary.y + scene.uvs[i2] * bary.z;
-        let at = crate::cpu::resolve::material_at(scene, material, uv);
+        let at = crate::cpu::resolve::material_at(material, &at);
         Surface {
             normal,
             diffuse: at.base_color * (1.0 - at.metallic),
@@ -344,6 +352,7 @@ impl Tracer {
             roughness: at.roughness,
             metallic: at.metallic,
             reflectivity: at.reflectivity,
+            occlusion: at.occlusion,
         }
     }
 
@@ -417,7 +426,8 @@ impl Tracer {
         let origin = point + s.normal * (1e-5 * self.scale);
         if s.diffuse.max_element() > 0.0 {
             let w = cosine_direction(s.normal, Vec2::new(rng.random(), rng.random()));
-            out += s.diffuse * self.radiance(scene, light, origin, w, depth - 1, rng);
+            // The material's occlusion texture dims the indirect light it reflects (glTF).
+            out += s.diffuse * s.occlusion * self.radiance(scene, light, origin, w, depth - 1, rng);
         }
         if s.reflectivity > 0.0 {
             let r = lobe(s.normal, v, s.roughness, rng);
@@ -482,7 +492,7 @@ impl Tracer {
                     let surface = self.surface(scene, id, hit, w);
                     let e = self.direct_irradiance(&lights, hit, surface.normal);
                     radiance += throughput * (surface.emission + surface.diffuse / PI * e);
-                    throughput *= surface.diffuse;
+                    throughput *= surface.diffuse * surface.occlusion;
                     if bounce + 1 == bounces || throughput.max_element() <= 0.0 {
                         break;
                     }

@@ -66,8 +66,7 @@ pub fn fixture(path: &str) -> std::path::PathBuf {
 pub fn mesh(positions: &[Vec3], indices: &[u32], double_sided: bool) -> Scene {
     let mut scene = Scene::default();
     scene.materials.push(deep_gbuffer::scene::Material { double_sided, ..Default::default() });
-    let data =
-        deep_gbuffer::scene::MeshData { positions, normals: &[], uvs: &[], indices, material: 0 };
+    let data = deep_gbuffer::scene::MeshData { positions, indices, ..Default::default() };
     scene.push_mesh(data).expect("indices in range");
     scene
 }

@@ -2,10 +2,13 @@
 //
 // Full (PACKED undefined), 4 x vec4<f32> per pixel:
 //   [view depth, normal.xyz] [base colour.rgb, roughness] [emissive.rgb, metallic]
-//   [motion.xy (pixels, current - previous), reflectivity, material id]
+//   [motion.xy (pixels, current - previous), reflectivity + occlusion, material id]
+//   where reflectivity + occlusion = round(4095 reflectivity) + 4096 round(4095 occlusion), an
+//   integer below 2^24 (exact as f32)
 // Packed (PACKED), 2 x vec4<u32> per pixel:
 //   [depth f32 bits, octahedral normal snorm16x2, base colour + roughness unorm8x4, emissive.rg f16x2]
-//   [emissive.b + metallic f16x2, motion f16x2, reflectivity unorm16 | material id << 16 (id < 65536), 0]
+//   [emissive.b + metallic f16x2, motion f16x2, reflectivity unorm16 | material id << 16 (id < 65536),
+//    occlusion unorm16]
 // Normals are world space, unit length, facing the camera; depth 0 marks a pixel with no surface.
 
 struct GSample {
@@ -17,6 +20,8 @@ struct GSample {
     metallic: f32,
     motion: vec2<f32>,
     reflectivity: f32,
+    // The material's ambient occlusion (its occlusion texture; 1 without one).
+    occlusion: f32,
     material: u32,
 }
 
@@ -88,7 +93,8 @@ fn gbuffer_encode(s: GSample) -> array<vec4<u32>, 2> {
     return array<vec4<u32>, 2>(
         vec4<u32>(bitcast<u32>(s.depth), normal, pack4x8unorm(vec4<f32>(s.base_color, s.roughness)), pack_half2(e.rg)),
         vec4<u32>(pack_half2(vec2<f32>(e.b, s.metallic)), pack_half2(m),
-                  (pack2x16unorm(vec2<f32>(s.reflectivity, 0.0)) & 0xffffu) | (min(s.material, 0xffffu) << 16u), 0u),
+                  (pack2x16unorm(vec2<f32>(s.reflectivity, 0.0)) & 0xffffu) | (min(s.material, 0xffffu) << 16u),
+                  pack2x16unorm(vec2<f32>(s.occlusion, 0.0))),
     );
 }
 
@@ -114,6 +120,7 @@ fn gbuffer_decode(w0: vec4<u32>, w1: vec4<u32>) -> GSample {
     s.metallic = bm.y;
     s.motion = unpack_half2(w1.y);
     s.reflectivity = unpack2x16unorm(w1.z & 0xffffu).x;
+    s.occlusion = unpack2x16unorm(w1.w).x;
     s.material = w1.z >> 16u;
     return s;
 }
@@ -126,8 +133,20 @@ fn gbuffer_encode(s: GSample) -> array<vec4<f32>, 4> {
         vec4<f32>(s.depth, s.normal),
         vec4<f32>(s.base_color, s.roughness),
         vec4<f32>(s.emissive, s.metallic),
-        vec4<f32>(s.motion, s.reflectivity, f32(s.material)),
+        vec4<f32>(s.motion, pack_factors(s.reflectivity, s.occlusion), f32(s.material)),
     );
+}
+
+// Reflectivity and occlusion (12 bits each) as one integer-valued f32.
+fn pack_factors(reflectivity: f32, occlusion: f32) -> f32 {
+    let r = u32(round(clamp(reflectivity, 0.0, 1.0) * 4095.0));
+    let o = u32(round(clamp(occlusion, 0.0, 1.0) * 4095.0));
+    return f32(r + (o << 12u));
+}
+
+fn unpack_factors(x: f32) -> vec2<f32> {
+    let v = u32(x);
+    return vec2<f32>(f32(v & 0xfffu) / 4095.0, f32(v >> 12u) / 4095.0);
 }
 
 // The view depth held by a sample's first word (0: no surface).
@@ -141,6 +160,7 @@ fn gword_normal(w0: GWord) -> vec3<f32> {
 }
 
 fn gbuffer_decode(w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>) -> GSample {
-    return GSample(w0.x, w0.yzw, w1.rgb, w1.a, w2.rgb, w2.a, w3.xy, w3.z, u32(w3.w));
+    let factors = unpack_factors(w3.z);
+    return GSample(w0.x, w0.yzw, w1.rgb, w1.a, w2.rgb, w2.a, w3.xy, factors.x, factors.y, u32(w3.w));
 }
 #endif

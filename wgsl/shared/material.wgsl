@@ -1,3 +1,17 @@
+// How a material reads one texture. Mirrors `GpuTextureSlot` in src/scene/upload.rs.
+struct TextureSlot {
+    offset: u32,
+    width: u32,
+    height: u32,
+    // bits 0-1: wrap across u, 2-3: across v (0 repeat, 1 clamp to edge, 2 mirrored repeat);
+    // bit 4: nearest texel; bit 5: coordinate set 1
+    sampler: u32,
+    // uv' = (dot(transform_u.xy, uv) + transform_u.z, dot(transform_v.xy, uv) + transform_v.z);
+    // transform_u.w: the slot's scale (normal scale, occlusion strength)
+    transform_u: vec4<f32>,
+    transform_v: vec4<f32>,
+}
+
 // A material as the kernels read it. Mirrors `GpuMaterial` in src/scene/upload.rs.
 struct Material {
     base_color: vec4<f32>,
@@ -5,22 +19,10 @@ struct Material {
     roughness: f32,
     metallic: f32,
     reflectivity: f32,
-    // bit 0: double-sided; bit 1: base-colour texture; bit 2: emissive texture; bit 3:
-    // metallic-roughness texture
+    // bit 0: double-sided; bit 1 + k: texture slot k is used
     flags: u32,
-    texture_offset: u32,
-    texture_width: u32,
-    texture_height: u32,
-    emissive_offset: u32,
-    emissive_width: u32,
-    emissive_height: u32,
-    metallic_roughness_offset: u32,
-    metallic_roughness_width: u32,
-    metallic_roughness_height: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-    _pad3: u32,
+    _pad: u32,
+    slots: array<TextureSlot, 5>,
 }
 
 // The largest emitted radiance a material may give (`MAX_RADIANCE` in src/scene/mod.rs): the
@@ -28,46 +30,31 @@ struct Material {
 const MAX_RADIANCE: f32 = 1e20;
 
 const MATERIAL_DOUBLE_SIDED: u32 = 1u;
-const MATERIAL_TEXTURED: u32 = 2u;
-const MATERIAL_EMISSIVE_TEXTURED: u32 = 4u;
-const MATERIAL_METALLIC_ROUGHNESS_TEXTURED: u32 = 8u;
+// The texture slots, in the order of `Material::slots` (`SLOT_*` in src/scene/upload.rs).
+const SLOT_BASE_COLOR: u32 = 0u;
+const SLOT_EMISSIVE: u32 = 1u;
+const SLOT_METALLIC_ROUGHNESS: u32 = 2u;
+const SLOT_NORMAL: u32 = 3u;
+const SLOT_OCCLUSION: u32 = 4u;
+const SLOT_COUNT: u32 = 5u;
 
-// Where a texture lies in the texel buffer.
-struct TextureRef {
-    offset: u32,
-    width: u32,
-    height: u32,
-}
-
-// Whether material m has a texture that lies wholly inside a texel buffer of `texel_count`
-// texels (checked without overflow: the host's materials are not checked by the CPU).
-fn base_texture(m: Material) -> TextureRef {
-    return TextureRef(m.texture_offset, m.texture_width, m.texture_height);
-}
-
-fn emissive_texture(m: Material) -> TextureRef {
-    return TextureRef(m.emissive_offset, m.emissive_width, m.emissive_height);
-}
-
-fn metallic_roughness_texture(m: Material) -> TextureRef {
-    return TextureRef(m.metallic_roughness_offset, m.metallic_roughness_width, m.metallic_roughness_height);
-}
-
-// Whether material m uses the texture of flag `bit` and it lies inside a texel buffer of
-// texel_count texels.
-fn uses_texture(m: Material, bit: u32, t: TextureRef, texel_count: u32) -> bool {
-    return (m.flags & bit) != 0u && texture_fits(t, texel_count);
+// Whether material m uses texture slot k and its texture lies inside a texel buffer of
+// texel_count texels (checked without overflow: the host's materials are not checked by the CPU).
+fn uses_texture(m: Material, k: u32, texel_count: u32) -> bool {
+    return (m.flags & (2u << k)) != 0u && texture_fits(m.slots[k], texel_count);
 }
 
 // Whether material m names a texture that does not lie inside a texel buffer of texel_count
 // texels (the resolve then leaves that texture out).
 fn textures_outside(m: Material, texel_count: u32) -> bool {
-    return ((m.flags & MATERIAL_TEXTURED) != 0u && !texture_fits(base_texture(m), texel_count))
-        || ((m.flags & MATERIAL_EMISSIVE_TEXTURED) != 0u && !texture_fits(emissive_texture(m), texel_count))
-        || ((m.flags & MATERIAL_METALLIC_ROUGHNESS_TEXTURED) != 0u && !texture_fits(metallic_roughness_texture(m), texel_count));
+    var outside = false;
+    for (var k = 0u; k < SLOT_COUNT; k++) {
+        outside = outside || ((m.flags & (2u << k)) != 0u && !texture_fits(m.slots[k], texel_count));
+    }
+    return outside;
 }
 
-fn texture_fits(t: TextureRef, texel_count: u32) -> bool {
+fn texture_fits(t: TextureSlot, texel_count: u32) -> bool {
     let w = t.width;
     let h = t.height;
     return w > 0u && h > 0u && w <= texel_count && h <= texel_count / w && t.offset <= texel_count - w * h;
