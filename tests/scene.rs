@@ -417,7 +417,7 @@ fn hostile_gltf_structures_are_refused_before_reading() {
     let scene = Scene::load(&write(&dir, "ok.gltf", &base.to_string())).unwrap();
     assert_eq!(scene.triangle_count(), 1);
     type Mutation = fn(&mut serde_json::Value);
-    let cases: [(Mutation, &str); 9] = [
+    let cases: [(Mutation, &str); 11] = [
         (|d| d["accessors"][1]["componentType"] = 5126.into(), "indices needs SCALAR"),
         (|d| d["accessors"][1]["componentType"] = 5122.into(), "indices needs SCALAR"),
         (
@@ -427,6 +427,14 @@ fn hostile_gltf_structures_are_refused_before_reading() {
                 d["accessors"][1]["type"] = "VEC2".into();
             },
             "TEXCOORD_0 needs VEC2",
+        ),
+        (
+            |d| d["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 0.into(),
+            "TEXCOORD_1 needs VEC2",
+        ),
+        (
+            |d| d["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 0.into(),
+            "TANGENT needs VEC4",
         ),
         (|d| d["bufferViews"][0]["byteStride"] = 4.into(), "byteStride 4"),
         (|d| d["accessors"][0]["count"] = 4.into(), "do not fit"),

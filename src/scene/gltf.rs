@@ -647,7 +647,8 @@ fn accepted(semantic: &str) -> Option<(&'static [u64], &'static str)> {
     Some(match semantic {
         "indices" => (&[5121, 5123, 5125], "SCALAR"),
         "POSITION" | "NORMAL" => (&[5126], "VEC3"),
-        "TEXCOORD_0" => (&[5126, 5121, 5123], "VEC2"),
+        "TEXCOORD_0" | "TEXCOORD_1" => (&[5126, 5121, 5123], "VEC2"),
+        "TANGENT" => (&[5126], "VEC4"),
         _ => return None,
     })
 }
@@ -678,8 +679,8 @@ fn check_document(
                 ));
             }
             let normalized = acc.get("normalized").and_then(|v| v.as_bool()).unwrap_or(false);
-            if semantic == "TEXCOORD_0" && ctype != 5126 && !normalized {
-                return Err(format!("accessors[{a}] (TEXCOORD_0) of integers must be normalized"));
+            if semantic.starts_with("TEXCOORD") && ctype != 5126 && !normalized {
+                return Err(format!("accessors[{a}] ({semantic}) of integers must be normalized"));
             }
         }
         let count = uint(acc, "count").unwrap_or(0);
