@@ -332,6 +332,10 @@ struct RenderArgs {
     /// aspect, so a tight one may cut the scene off).
     #[arg(long)]
     fit: bool,
+    /// Side of each shadow-map face in texels, 16 to 4096 [default: about one texel per pixel
+    /// where the scene fills the view, a power of two from 512 to 4096].
+    #[arg(long)]
+    shadow_resolution: Option<u32>,
     /// Write depth, normal and base colour of the layers the frame drew, and each lighting term
     /// (ao, direct, radiosity, indirect, reflections; those the frame ran), as PNG and EXR into
     /// this folder.
@@ -862,6 +866,10 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     let mut settings = scaled_defaults(&scene);
     settings.width = args.size.0;
     settings.height = args.size.1;
+    settings.shadows.resolution = args.shadow_resolution.unwrap_or_else(|| {
+        let (w, h) = args.size;
+        deep_gbuffer::ShadowSettings::resolution_for(w, h, &camera, scene.bounds())
+    });
     settings.dz = args.dz.unwrap_or(settings.dz);
     settings.layer1 = args.layer1;
     settings.atomics = args.atomics;

@@ -527,6 +527,40 @@ impl Default for ShadowSettings {
 }
 
 impl ShadowSettings {
+    /// The smallest and largest resolution [`resolution_for`](ShadowSettings::resolution_for)
+    /// picks.
+    pub const AUTO_RESOLUTION: (u32, u32) = (512, 4096);
+
+    /// A shadow-map resolution for a `width` x `height` image of a scene with `bounds` seen by
+    /// `camera`: about one texel per pixel where the scene fills the view. The scene's bounding
+    /// sphere (radius r, centre at distance d from the eye) spans
+    /// `N = height * r / (d * tan(fov_y / 2))` pixels (`height * 2 r / view height` for an
+    /// orthographic camera; the image's larger side when the eye is inside the sphere), at most
+    /// the image's larger side; the resolution is the power of two at or above N, within
+    /// [`AUTO_RESOLUTION`](ShadowSettings::AUTO_RESOLUTION). A directional light's map covers
+    /// the bounds, so its texels are then about as large as the pixels showing them.
+    pub fn resolution_for(
+        width: u32,
+        height: u32,
+        camera: &crate::Camera,
+        bounds: Option<(glam::Vec3, glam::Vec3)>,
+    ) -> u32 {
+        let (lo, hi) = Self::AUTO_RESOLUTION;
+        let side = width.max(height) as f32;
+        let Some((a, b)) = bounds else { return lo };
+        let r = (b - a).length() * 0.5;
+        let d = ((a + b) * 0.5 - camera.eye).length();
+        let n = match camera.projection {
+            crate::Projection::Perspective { fov_y_deg, .. } if d > r => {
+                height as f32 * r / (d * (fov_y_deg.to_radians() * 0.5).tan())
+            }
+            crate::Projection::Perspective { .. } => side,
+            crate::Projection::Orthographic { height: view, .. } => height as f32 * 2.0 * r / view,
+        };
+        let n = if n.is_finite() { n.clamp(1.0, side) } else { side };
+        (n.ceil() as u32).next_power_of_two().clamp(lo, hi)
+    }
+
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
         if !(16..=4096).contains(&self.resolution) {

@@ -235,3 +235,32 @@ fn default_lengths_follow_the_scene_size_in_powers_of_two() {
     assert_eq!(counts(&s), counts(&d), "counts and fractions stay");
     s.validate().unwrap();
 }
+
+/// The default shadow-map resolution follows how many pixels the scene spans: the Cornell box
+/// filling a 640x480 view (about 440 pixels tall) keeps 512, the same view at 1920x1080 (about
+/// 1000 pixels) gets 1024, a far camera or a
+/// small image 512, a camera inside the scene the image's side (at most 4096), at any scale.
+#[test]
+fn default_shadow_resolution_follows_the_pixels_the_scene_spans() {
+    use deep_gbuffer::ShadowSettings;
+    let cornell = Scene::from_spec("builtin:cornell").unwrap();
+    let bounds = cornell.bounds();
+    let fitted = cornell.fit_camera(&cornell.camera_or_default(), 640.0 / 480.0);
+    assert_eq!(ShadowSettings::resolution_for(640, 480, &fitted, bounds), 512);
+    let wide = cornell.fit_camera(&cornell.camera_or_default(), 1920.0 / 1080.0);
+    assert_eq!(ShadowSettings::resolution_for(1920, 1080, &wide, bounds), 1024);
+    let mut far = fitted.clone();
+    far.eye = far.target + (far.eye - far.target) * 10.0;
+    assert_eq!(ShadowSettings::resolution_for(640, 480, &far, bounds), 512);
+    let mut inside = fitted.clone();
+    inside.eye = glam::Vec3::ZERO;
+    assert_eq!(ShadowSettings::resolution_for(1920, 1080, &inside, bounds), 2048);
+    assert_eq!(ShadowSettings::resolution_for(8000, 8000, &inside, bounds), 4096);
+    assert_eq!(ShadowSettings::resolution_for(640, 480, &fitted, None), 512);
+    // The same view of the same box 1000 times larger: the same resolution.
+    let big = |v: glam::Vec3| v * 1000.0;
+    let mut scaled = fitted.clone();
+    (scaled.eye, scaled.target) = (big(fitted.eye), big(fitted.target));
+    let bounds = bounds.map(|(a, b)| (big(a), big(b)));
+    assert_eq!(ShadowSettings::resolution_for(1920, 1080, &scaled, bounds), 1024);
+}
