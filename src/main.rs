@@ -894,7 +894,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     }
     if args.plan {
         // The plan alone: what a frame would run, without rendering one.
-        println!("{}", renderer.plan(&buffers));
+        println!("{}", renderer.plan(&buffers, &camera));
         return Ok(());
     }
     if args.frames == Some(0) || !args.orbit.is_finite() {
@@ -904,7 +904,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         });
     }
     // Without --frames, a still camera renders until the temporal radiosity settles.
-    let settle = args.frames.is_none() && renderer.plan(&buffers).runs(Effect::Radiosity);
+    let settle = args.frames.is_none() && renderer.plan(&buffers, &camera).runs(Effect::Radiosity);
     let frames = args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES } else { 1 });
     let mut last_mean: Option<f64> = None;
     let start = camera.clone();

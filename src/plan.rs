@@ -9,7 +9,7 @@
 use std::borrow::Cow;
 use std::fmt;
 
-use crate::scene::SceneInfo;
+use crate::scene::{Camera, Projection, SceneInfo};
 use crate::settings::{Layer1Variant, Settings};
 
 /// One pass of a frame.
@@ -198,6 +198,9 @@ pub enum Reason {
     Disabled,
     /// The scene does not call for it (no ambient term, no light...).
     NotNeeded,
+    /// Its radius covers less than a pixel even where the scene comes nearest the camera: its
+    /// taps could not leave the pixel they start from, so it would change nothing.
+    UnderAPixel,
 }
 
 /// The passes of one frame, in order, and why each effect left out is left out.
@@ -219,24 +222,68 @@ pub struct Plan {
     pub reused: Vec<PassId>,
 }
 
+/// The most pixels a world-space `length` spans in an image `height` pixels tall seen through
+/// `camera`, over a scene within `bounds`: at the scene's nearest point (no nearer than the near
+/// plane) for a perspective camera, anywhere for an orthographic one; infinite when the bounds
+/// are unknown or the eye is inside them.
+pub fn pixels_spanned(
+    camera: &Camera,
+    height: u32,
+    bounds: Option<(glam::Vec3, glam::Vec3)>,
+    length: f32,
+) -> f32 {
+    match camera.projection {
+        Projection::Orthographic { height: view, .. } => length * height as f32 / view,
+        Projection::Perspective { fov_y_deg, near, .. } => {
+            let Some((lo, hi)) = bounds else { return f32::INFINITY };
+            let outside = (lo - camera.eye).max(camera.eye - hi).max(glam::Vec3::ZERO).length();
+            let focal = height as f32 / (2.0 * (fov_y_deg.to_radians() * 0.5).tan());
+            let pixels = length * focal / outside.max(near);
+            if pixels.is_nan() { f32::INFINITY } else { pixels }
+        }
+    }
+}
+
 impl Plan {
-    /// The plan for a scene with `info` under `settings`.
+    /// The plan for a scene with `info` under `settings`, whatever the camera (an effect whose
+    /// radius is under a pixel still runs: see [`for_view`](Plan::for_view)).
     pub fn new(info: &SceneInfo, settings: &Settings) -> Plan {
+        Plan::build(info, settings, None)
+    }
+
+    /// The plan for a scene with `info` under `settings` seen through `camera`: as
+    /// [`new`](Plan::new), and the obscurance and the radiosity are left out
+    /// ([`Reason::UnderAPixel`]) when their radius spans less than a pixel even at the scene's
+    /// nearest point ([`pixels_spanned`]).
+    pub fn for_view(info: &SceneInfo, settings: &Settings, camera: &Camera) -> Plan {
+        Plan::build(info, settings, Some(camera))
+    }
+
+    fn build(info: &SceneInfo, settings: &Settings, camera: Option<&Camera>) -> Plan {
         let e = &settings.effects;
         let mut left_out = Vec::new();
-        let mut decide = |effect: Effect, enabled: bool, needed: bool| {
-            let reason = match (enabled, needed) {
-                (false, _) => Some(Reason::Disabled),
-                (true, false) => Some(Reason::NotNeeded),
-                (true, true) => None,
+        let covers = |radius: f32| {
+            camera.is_none_or(|c| pixels_spanned(c, settings.height, info.bounds, radius) >= 1.0)
+        };
+        let mut decide = |effect: Effect, enabled: bool, needed: bool, covers: bool| {
+            let reason = match (enabled, needed, covers) {
+                (false, _, _) => Some(Reason::Disabled),
+                (true, false, _) => Some(Reason::NotNeeded),
+                (true, true, false) => Some(Reason::UnderAPixel),
+                (true, true, true) => None,
             };
             if let Some(r) = reason {
                 left_out.push((effect, r));
             }
             reason.is_none()
         };
-        let ao = decide(Effect::Ao, settings.ao.enabled && e.ao, info.ambient.max_element() > 0.0);
-        let direct = decide(Effect::Direct, e.direct, !info.lights.is_empty());
+        let ao = decide(
+            Effect::Ao,
+            settings.ao.enabled && e.ao,
+            info.ambient.max_element() > 0.0,
+            covers(settings.ao.radius),
+        );
+        let direct = decide(Effect::Direct, e.direct, !info.lights.is_empty(), true);
         let shadow_lights: Vec<PassId> = info
             .lights
             .iter()
@@ -248,16 +295,19 @@ impl Plan {
             Effect::Shadows,
             e.shadows && settings.shadows.enabled,
             direct && !shadow_lights.is_empty(),
+            true,
         );
         let radiosity = decide(
             Effect::Radiosity,
             settings.radiosity.enabled && e.radiosity,
             !info.lights.is_empty() || info.emissive,
+            covers(settings.radiosity.radius),
         );
         let reflections = decide(
             Effect::Reflections,
             settings.reflections.enabled && e.reflections,
             info.reflective,
+            true,
         );
         let wants_layer1 = (ao && settings.ao.two_layers) || radiosity || reflections;
         let layers = match settings.layers {
@@ -349,6 +399,9 @@ impl fmt::Display for Plan {
             None => "runs",
             Some(Reason::Disabled) => "off (disabled)",
             Some(Reason::NotNeeded) => "off (the scene does not call for it)",
+            Some(Reason::UnderAPixel) => {
+                "off (its radius spans less than a pixel where the scene is nearest)"
+            }
         };
         writeln!(f, "layers:  {}", self.layers)?;
         writeln!(

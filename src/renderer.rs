@@ -468,13 +468,13 @@ impl Renderer {
         self.geometry_generation += 1;
     }
 
-    /// The plan for `scene` under this renderer's settings (what [`encode`](Renderer::encode)
-    /// will run). The first frame of a one-pass layer-1 variant rasterizes the layers in two
+    /// The plan for `scene` seen through `camera` under this renderer's settings (what
+    /// [`encode`](Renderer::encode) will run; [`Plan::for_view`]). The first frame of a one-pass layer-1 variant rasterizes the layers in two
     /// passes (`raster.layer0`, `raster.layer1`) instead of `raster.layers`. A shadow map an
     /// earlier frame drew is kept while nothing it depends on changed (see
     /// [`geometry_changed`](Renderer::geometry_changed)): its pass moves to [`Plan::reused`].
-    pub fn plan(&self, scene: &SceneBuffers) -> Plan {
-        let mut plan = Plan::new(scene.info(), &self.settings);
+    pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
+        let mut plan = Plan::for_view(scene.info(), &self.settings, camera);
         if self.history.is_none()
             && let Some(i) = plan.passes.iter().position(|p| *p == PassId::RasterLayers)
         {
@@ -540,7 +540,7 @@ impl Renderer {
         provided: bool,
     ) -> Result<()> {
         camera.validate()?;
-        let mut plan = self.plan(scene);
+        let mut plan = self.plan(scene, camera);
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
         }
@@ -716,7 +716,7 @@ impl Renderer {
         camera: &Camera,
         layers: &[GBufferLayer],
     ) -> Result<()> {
-        self.check_provided(scene, layers)?;
+        self.check_provided(scene, camera, layers)?;
         let s = &self.settings;
         let empty = GBufferLayer {
             width: s.width,
@@ -748,7 +748,12 @@ impl Renderer {
     }
 
     /// Refuses provided G-buffer layers that do not fit this renderer and `scene`'s plan.
-    fn check_provided(&self, scene: &SceneBuffers, layers: &[GBufferLayer]) -> Result<()> {
+    fn check_provided(
+        &self,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        layers: &[GBufferLayer],
+    ) -> Result<()> {
         let s = &self.settings;
         if s.precision != crate::Precision::Full {
             return Err(Error::setting(
@@ -756,7 +761,7 @@ impl Renderer {
                 "a provided G-buffer is uploaded in the full encoding (set precision to full)",
             ));
         }
-        let needed = self.plan(scene).layers as usize;
+        let needed = self.plan(scene, camera).layers as usize;
         if layers.len() < needed || layers.len() > 2 {
             return Err(Error::setting(
                 "gbuffer",

@@ -145,9 +145,10 @@ fn the_renderer_runs_and_times_exactly_the_plan() {
         scene.ambient = ambient;
         let camera = scene.camera_or_default();
         let settings = Settings { layer1: variant, ..Settings::with_size(32, 24) };
-        let r = render_frames(&scene, &[camera.clone(), camera], settings);
+        let r = render_frames(&scene, &[camera.clone(), camera.clone()], settings);
         let plan = r.renderer.last_plan().unwrap().clone();
-        assert_eq!(plan, r.renderer.plan(&r.buffers), "the plan is stable from frame to frame");
+        let planned = r.renderer.plan(&r.buffers, &camera);
+        assert_eq!(plan, planned, "the plan is stable from frame to frame");
         assert_eq!(r.renderer.passes(), &plan.passes[..]);
         let timed: Vec<String> =
             r.renderer.timings(&g.device).unwrap().into_iter().map(|t| t.name).collect();
@@ -263,4 +264,37 @@ fn default_shadow_resolution_follows_the_pixels_the_scene_spans() {
     (scaled.eye, scaled.target) = (big(fitted.eye), big(fitted.target));
     let bounds = bounds.map(|(a, b)| (big(a), big(b)));
     assert_eq!(ShadowSettings::resolution_for(1920, 1080, &scaled, bounds), 1024);
+}
+
+/// An obscurance or radiosity radius that spans less than a pixel even at the scene's nearest
+/// point leaves its effect out and says why; the same settings from the scene's own camera run
+/// it, and a frame from far away records no obscurance or radiosity pass.
+#[test]
+fn a_radius_under_a_pixel_leaves_its_effect_out() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let info = SceneInfo::of(&scene);
+    let near = scene.camera_or_default();
+    let settings = Settings::with_size(64, 48);
+    let plan = Plan::for_view(&info, &settings, &near);
+    assert!(plan.runs(Effect::Ao) && plan.runs(Effect::Radiosity));
+    // 10,000 units away the box is a speck: a radius of 0.5 spans a thousandth of a pixel.
+    let mut far = near.clone();
+    far.eye = far.target + (far.eye - far.target).normalize() * 1e4;
+    let span = deep_gbuffer::plan::pixels_spanned(&far, 48, info.bounds, settings.ao.radius);
+    assert!(span > 0.0 && span < 0.01, "{span}");
+    let plan = Plan::for_view(&info, &settings, &far);
+    assert_eq!(plan.reason(Effect::Ao), Some(Reason::UnderAPixel));
+    assert_eq!(plan.reason(Effect::Radiosity), Some(Reason::UnderAPixel));
+    assert!(plan.runs(Effect::Direct));
+    assert!(plan.to_string().contains("less than a pixel"), "{plan}");
+    // A radius that reaches a pixel again runs, as does an unknown extent.
+    let wide =
+        Settings { ao: AoSettings { radius: 5000.0, ..AoSettings::default() }, ..settings.clone() };
+    assert!(Plan::for_view(&info, &wide, &far).runs(Effect::Ao));
+    let unknown = SceneInfo { bounds: None, ..info.clone() };
+    assert!(Plan::for_view(&unknown, &settings, &far).runs(Effect::Ao));
+    // The renderer plans with its camera: the far frame records neither pass.
+    let r = render_frames(&scene, &[far], settings);
+    let passes = r.renderer.passes();
+    assert!(!passes.contains(&PassId::Ao) && !passes.contains(&PassId::Radiosity), "{passes:?}");
 }
