@@ -9,7 +9,7 @@ use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
     AoEstimator, AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error,
     Layer1Variant, Normalization, PassId, Precision, Preset, RadiosityEstimator, RadiositySettings,
-    Renderer, Result, Scene, SceneBuffers, Settings, output,
+    Renderer, Result, Scene, SceneBuffers, SceneInfo, Settings, ShadowSettings, output,
 };
 use glam::Vec3;
 
@@ -866,10 +866,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     let mut settings = scaled_defaults(&scene);
     settings.width = args.size.0;
     settings.height = args.size.1;
-    settings.shadows.resolution = args.shadow_resolution.unwrap_or_else(|| {
-        let (w, h) = args.size;
-        deep_gbuffer::ShadowSettings::resolution_for(w, h, &camera, scene.bounds())
-    });
+    let (w, h) = args.size;
+    let auto_shadows = ShadowSettings::resolution_for(w, h, &camera, scene.bounds());
+    settings.shadows.resolution = args.shadow_resolution.unwrap_or(auto_shadows);
     settings.dz = args.dz.unwrap_or(settings.dz);
     settings.layer1 = args.layer1;
     settings.atomics = args.atomics;
@@ -887,6 +886,16 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     args.estimators.apply(&mut settings);
     settings.validate()?;
     let gpu = open_gpu(adapter)?;
+    if args.shadow_resolution.is_none() {
+        // The default, as large as the device holds for all the lights' faces.
+        let faces = deep_gbuffer::frame::light_faces(&SceneInfo::of(&scene), 16, (0, 0, 0))
+            .iter()
+            .map(|l| l.faces.len())
+            .sum();
+        let l = gpu.device.limits();
+        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        settings.shadows.resolution = ShadowSettings::within(auto_shadows, faces, limit);
+    }
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings.clone())?;
     if let Some(path) = &args.environment {

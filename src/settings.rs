@@ -538,7 +538,8 @@ impl ShadowSettings {
     /// orthographic camera; the image's larger side when the eye is inside the sphere), at most
     /// the image's larger side; the resolution is the power of two at or above N, within
     /// [`AUTO_RESOLUTION`](ShadowSettings::AUTO_RESOLUTION). A directional light's map covers
-    /// the bounds, so its texels are then about as large as the pixels showing them.
+    /// the bounds, so its texels are then about as large as the pixels showing them. The
+    /// device may hold fewer: see [`within`](ShadowSettings::within).
     pub fn resolution_for(
         width: u32,
         height: u32,
@@ -559,6 +560,16 @@ impl ShadowSettings {
         };
         let n = if n.is_finite() { n.clamp(1.0, side) } else { side };
         (n.ceil() as u32).next_power_of_two().clamp(lo, hi)
+    }
+
+    /// `resolution` halved until `faces` shadow-map faces of it (8 bytes a texel, the renderer's
+    /// atlas) fit in `byte_limit` bytes (the device's largest storage binding), at least 16.
+    pub fn within(resolution: u32, faces: usize, byte_limit: u64) -> u32 {
+        let mut r = resolution.max(16);
+        while r > 16 && u64::from(r) * u64::from(r) * 8 * faces as u64 > byte_limit {
+            r /= 2;
+        }
+        r
     }
 
     /// Checks every field's range.

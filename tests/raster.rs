@@ -323,6 +323,29 @@ fn one_pass_variants_equal_two_pass_on_a_static_camera() {
     }
 }
 
+/// Under camera motion the one-pass Reproject variant's layer 1 equals the CPU reference's bit for
+/// bit: each fragment reprojected into the previous frame (`FrameUniform::reproject`) and tested
+/// against the previous frame's layer 0 there.
+#[test]
+fn reprojected_layer1_under_motion_matches_cpu_reference() {
+    let (scene, camera) = cornell();
+    let mut moved = camera.clone();
+    let turn = glam::Quat::from_rotation_y(3f32.to_radians());
+    moved.eye = moved.target + turn * (moved.eye - moved.target) + Vec3::new(0.0, 0.05, 0.0);
+    let settings = Settings { layer1: Layer1Variant::Reproject, dz: 0.05, ..settings(96, 72) };
+    let r = render_frames(&scene, &[camera.clone(), moved], settings.clone());
+    assert_eq!(r.renderer.passes()[1], PassId::RasterLayers);
+    let ds = double_sided_triangles(&scene);
+    let input = RasterInput::new(&scene, &ds);
+    let first = render(&scene, &camera, settings);
+    let previous = cpu::raster_layer0(&first.frame, &input);
+    assert_eq!(first.vis0, previous, "the previous frame's layer 0");
+    let cpu1 = cpu::raster_layer1(&r.frame, &input, &previous, true);
+    assert!(cpu1.iter().any(|&w| w != VIS_EMPTY), "layer 1 is not empty");
+    let (n, report) = mismatches(&r.vis1, &cpu1, 96);
+    assert_eq!(n, 0, "reprojected layer 1 differs from the CPU reference at {n} pixels:{report}");
+}
+
 #[test]
 fn first_frame_of_a_one_pass_variant_is_two_pass() {
     let (scene, camera) = cornell();

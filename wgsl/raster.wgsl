@@ -260,9 +260,8 @@ fn covers(e: i32, top_left_edge: bool) -> bool {
 fn layer1_accepts(pixel: vec2<i32>, d: f32) -> bool {
 #if WRITE_L1
 #if REPROJECT
-    let vp = view_position(frame, vec2<f32>(pixel) + 0.5, d);
-    let world = mat_mul(frame.inv_view, vec4<f32>(vp, 1.0));
-    let pc = mat_mul(frame.prev_view_proj, world);
+    let r = reproject(frame, vec2<f32>(pixel) + 0.5, d);
+    let pc = r.clip;
     if !(pc.w > 0.0) {
         return false;
     }
@@ -272,8 +271,7 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32) -> bool {
     }
     let pp = vec2<u32>(prev);
     let z0 = zref[2u * (pp.y * frame.width + pp.x) + 1u];
-    let prev_d = -mat_mul(frame.prev_view, world).z;
-    return z0 != VIS_EMPTY && prev_d > bitcast<f32>(z0) + frame.dz;
+    return z0 != VIS_EMPTY && r.depth > bitcast<f32>(z0) + frame.dz;
 #else
     let z0 = zref[2u * (u32(pixel.y) * frame.width + u32(pixel.x)) + 1u];
     return z0 != VIS_EMPTY && d > bitcast<f32>(z0) + frame.dz;
@@ -295,7 +293,7 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
     vis0_write(p, d, t);
 #endif
 #if WRITE_L1
-    if layer1_accepts(pixel, d) {
+    if vis1_may_take(p, d, t) && layer1_accepts(pixel, d) {
         vis1_write(p, d, t);
     }
 #endif

@@ -125,10 +125,21 @@ fn slot_uv(t: TextureSlot, tri: vec3<u32>, bary: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(dot(t.transform_u.xy, uv) + t.transform_u.z, dot(t.transform_v.xy, uv) + t.transform_v.z);
 }
 
-// Whether material m reads slot k at this point: the slot is used, its texture fits the texel
-// buffer and its coordinates are finite and moderate.
-fn reads_slot(m: Material, k: u32, uv: vec2<f32>) -> bool {
-    return uses_texture(m, k, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6));
+// Texture slot k (which material mid uses) at this point: whether it is read (its texture fits
+// the texel buffer and its coordinates are finite and moderate) and its value.
+struct SlotRead {
+    ok: bool,
+    value: vec3<f32>,
+}
+
+// (Material `mid` is read field by field from the binding: a whole material is 288 bytes.)
+fn read_slot(mid: u32, k: u32, tri: vec3<u32>, bary: vec3<f32>, srgb: bool) -> SlotRead {
+    let t = materials[mid].slots[k];
+    let uv = slot_uv(t, tri, bary);
+    if !(texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6))) {
+        return SlotRead(false, vec3<f32>(0.0));
+    }
+    return SlotRead(true, sample_texture(t, uv, srgb));
 }
 
 // The normal n turned by the tangent-space normal texture value c (linear rgb): the frame is
@@ -240,14 +251,57 @@ fn shade(pixel: vec2<u32>) -> GSample {
     }
     let tri = vec3<u32>(i0, i1, i2);
     let mid = tri_materials[id];
+    var s = empty_sample();
     if mid < frame.material_count {
-        let m = materials[mid];
-        let t = m.slots[SLOT_NORMAL];
-        let uv = slot_uv(t, tri, bary);
-        if reads_slot(m, SLOT_NORMAL, uv) {
-            let c = sample_texture(t, uv, false);
-            n = normal_mapped(n, c, t.transform_u.w, tri, bary, array<vec3<f32>, 3>(w0, w1, w2), (t.sampler >> 5u) & 1u);
+        // Every texture the material uses, one loop iteration each: one copy of the sampling
+        // code, and none of it runs for a material without textures (a SIMD driver that runs
+        // both sides of a branch still leaves a loop whose lanes are all done).
+        var texel_values: array<vec3<f32>, SLOT_COUNT>;
+        var read = 0u;
+        var pending = (materials[mid].flags >> 1u) & ((1u << SLOT_COUNT) - 1u);
+        loop {
+            if pending == 0u {
+                break;
+            }
+            let k = firstTrailingBit(pending);
+            pending &= pending - 1u;
+            let r = read_slot(mid, k, tri, bary, k == SLOT_BASE_COLOR || k == SLOT_EMISSIVE);
+            if r.ok {
+                texel_values[k] = r.value;
+                read |= 1u << k;
+            }
         }
+        if (read & (1u << SLOT_NORMAL)) != 0u {
+            let t = materials[mid].slots[SLOT_NORMAL];
+            n = normal_mapped(n, texel_values[SLOT_NORMAL], t.transform_u.w, tri, bary, array<vec3<f32>, 3>(w0, w1, w2), (t.sampler >> 5u) & 1u);
+        }
+        var base = materials[mid].base_color.rgb;
+        if (read & (1u << SLOT_BASE_COLOR)) != 0u {
+            base *= texel_values[SLOT_BASE_COLOR];
+        }
+        var emissive = materials[mid].emissive;
+        if (read & (1u << SLOT_EMISSIVE)) != 0u {
+            emissive *= texel_values[SLOT_EMISSIVE];
+        }
+        var roughness = unit(materials[mid].roughness);
+        var metallic = unit(materials[mid].metallic);
+        var reflectivity = unit(materials[mid].reflectivity);
+        if (read & (1u << SLOT_METALLIC_ROUGHNESS)) != 0u {
+            let mr = texel_values[SLOT_METALLIC_ROUGHNESS];
+            roughness = unit(roughness * mr.g);
+            metallic = unit(metallic * mr.b);
+            // The glTF rule the loader applies to the factors, per texel.
+            reflectivity = metallic * (1.0 - roughness);
+        }
+        if (read & (1u << SLOT_OCCLUSION)) != 0u {
+            let strength = unit(materials[mid].slots[SLOT_OCCLUSION].transform_u.w);
+            s.occlusion = unit(1.0 + strength * (texel_values[SLOT_OCCLUSION].r - 1.0));
+        }
+        s.base_color = bounded(base, 1.0);
+        s.roughness = roughness;
+        s.metallic = metallic;
+        s.reflectivity = reflectivity;
+        s.emissive = bounded(emissive, MAX_RADIANCE);
     }
     // Face the camera (double-sided surfaces seen from behind, and interpolation past the horizon).
     if dot(geo, to_eye) < 0.0 {
@@ -260,49 +314,9 @@ fn shade(pixel: vec2<u32>) -> GSample {
     if !(dot(n, n) > 0.5) {
         n = geo;
     }
-
-    var s = empty_sample();
     s.depth = d;
     s.normal = n;
     s.material = mid;
-    if mid < frame.material_count {
-        let m = materials[mid];
-        var base = m.base_color.rgb;
-        let tb = m.slots[SLOT_BASE_COLOR];
-        let uv_b = slot_uv(tb, tri, bary);
-        if reads_slot(m, SLOT_BASE_COLOR, uv_b) {
-            base *= sample_texture(tb, uv_b, true);
-        }
-        var emissive = m.emissive;
-        let te = m.slots[SLOT_EMISSIVE];
-        let uv_e = slot_uv(te, tri, bary);
-        if reads_slot(m, SLOT_EMISSIVE, uv_e) {
-            emissive *= sample_texture(te, uv_e, true);
-        }
-        var roughness = unit(m.roughness);
-        var metallic = unit(m.metallic);
-        var reflectivity = unit(m.reflectivity);
-        let tm = m.slots[SLOT_METALLIC_ROUGHNESS];
-        let uv_m = slot_uv(tm, tri, bary);
-        if reads_slot(m, SLOT_METALLIC_ROUGHNESS, uv_m) {
-            let mr = sample_texture(tm, uv_m, false);
-            roughness = unit(roughness * mr.g);
-            metallic = unit(metallic * mr.b);
-            // The glTF rule the loader applies to the factors, per texel.
-            reflectivity = metallic * (1.0 - roughness);
-        }
-        let to = m.slots[SLOT_OCCLUSION];
-        let uv_o = slot_uv(to, tri, bary);
-        if reads_slot(m, SLOT_OCCLUSION, uv_o) {
-            let strength = unit(to.transform_u.w);
-            s.occlusion = unit(1.0 + strength * (sample_texture(to, uv_o, false).r - 1.0));
-        }
-        s.base_color = bounded(base, 1.0);
-        s.roughness = roughness;
-        s.metallic = metallic;
-        s.reflectivity = reflectivity;
-        s.emissive = bounded(emissive, MAX_RADIANCE);
-    }
     // Motion: where this point was on screen in the previous frame (static geometry).
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(world, 1.0));
     if pc.w > 1e-20 {

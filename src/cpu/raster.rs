@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::frame::mat_mul;
 use crate::frame::FrameUniform;
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
 
@@ -248,9 +248,8 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
     if !reproject {
         return depth_of(zref[(y * f.width + x) as usize]).is_some_and(|z0| d > z0 + f.dz);
     }
-    let vp = view_position(f, glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5), d);
-    let world = mat_mul(&f.inv_view, vp.extend(1.0).to_array()).to_array();
-    let pc = mat_mul(&f.prev_view_proj, world).to_array();
+    let (pc, prev_d) = f.reproject(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5), d);
+    let pc = pc.to_array();
     if pc[3].is_nan() || pc[3] <= 0.0 {
         return false;
     }
@@ -263,7 +262,6 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
         return false;
     }
     let (px, py) = (prev[0] as u32, prev[1] as u32);
-    let prev_d = -mat_mul(&f.prev_view, world).z;
     depth_of(zref[(py * f.width + px) as usize]).is_some_and(|z0| prev_d > z0 + f.dz)
 }
 

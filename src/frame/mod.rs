@@ -117,6 +117,14 @@ pub struct FrameUniform {
     pub prev_view: [[f32; 4]; 4],
     /// The previous frame's world to clip.
     pub prev_view_proj: [[f32; 4]; 4],
+    /// Reprojection of a fragment at pixel coordinate (x, y) and view depth d to the previous
+    /// frame, with [`reproject_fixed`](FrameUniform::reproject_fixed) (see
+    /// [`FrameUniform::reproject`]): columns 0-2 the previous clip position's terms in `d x`,
+    /// `d y` and `d`; column 3 (x, y, z) the previous view depth's.
+    pub reproject_scaled: [[f32; 4]; 4],
+    /// The terms in `x`, `y` and 1, laid out as
+    /// [`reproject_scaled`](FrameUniform::reproject_scaled).
+    pub reproject_fixed: [[f32; 4]; 4],
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -147,7 +155,7 @@ pub struct FrameUniform {
 /// camera's layer 0; not the shadow maps, so each triangle counts once a frame).
 pub const FRAME_DIAGNOSTICS: u32 = 1;
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 5 * 64 + 12 * 4);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 7 * 64 + 12 * 4);
 
 mirrored!(
     FrameUniform,
@@ -159,6 +167,8 @@ mirrored!(
         inv_view,
         prev_view,
         prev_view_proj,
+        reproject_scaled,
+        reproject_fixed,
         width,
         height,
         near,
@@ -193,7 +203,61 @@ impl CameraMatrices {
     }
 }
 
+/// The reprojection terms of [`FrameUniform::reproject_scaled`] and
+/// [`FrameUniform::reproject_fixed`]. A fragment's view position is affine in (x, y) for a given
+/// depth d: `v = d (x ua + y ub + uc) + (x va + y vb + vc)` (perspective: the u terms; orthographic:
+/// uc = (0, 0, -1) and the v terms), so its previous clip position `T (v, 1)` (T: view to the
+/// previous clip space) and previous view depth `-S (v, 1).z` (S: view to the previous view space)
+/// are too. Computed in f64 from the two cameras.
+fn reprojection(
+    current: CameraMatrices,
+    previous: CameraMatrices,
+    width: u32,
+    height: u32,
+    ortho: bool,
+) -> ([[f32; 4]; 4], [[f32; 4]; 4]) {
+    use glam::{DMat4, DVec3, DVec4};
+    let inv_view = current.view.as_dmat4().inverse();
+    let t = previous.proj.as_dmat4() * previous.view.as_dmat4() * inv_view;
+    let s = previous.view.as_dmat4() * inv_view;
+    let p = current.proj.as_dmat4();
+    let (p00, p11) = (p.x_axis.x, p.y_axis.y);
+    let (x, y) = (
+        DVec3::new(2.0 / (f64::from(width) * p00), 0.0, 0.0),
+        DVec3::new(0.0, -2.0 / (f64::from(height) * p11), 0.0),
+    );
+    let (u, v) = if ortho {
+        let c = DVec3::new((-1.0 - p.w_axis.x) / p00, (1.0 - p.w_axis.y) / p11, 0.0);
+        ([DVec3::ZERO, DVec3::ZERO, DVec3::NEG_Z], [x, y, c])
+    } else {
+        ([x, y, DVec3::new(-1.0 / p00, 1.0 / p11, -1.0)], [DVec3::ZERO; 3])
+    };
+    let clip = |m: DVec3| t * m.extend(0.0);
+    let depth = |m: DVec3| -(s * m.extend(0.0)).z;
+    let columns = |terms: [DVec3; 3], last: DVec4, depth_last: f64| {
+        let d = DVec4::new(depth(terms[0]), depth(terms[1]), depth(terms[2]) + depth_last, 0.0);
+        DMat4::from_cols(clip(terms[0]), clip(terms[1]), clip(terms[2]) + last, d)
+            .as_mat4()
+            .to_cols_array_2d()
+    };
+    (columns(u, DVec4::ZERO, 0.0), columns(v, t.w_axis, -s.w_axis.z))
+}
+
 impl FrameUniform {
+    /// Where a fragment at pixel coordinate `px` (pixel centres at .5) and view depth `d` was in
+    /// the previous frame: its clip position and view depth (as `reproject` in
+    /// `wgsl/shared/frame.wgsl`).
+    pub fn reproject(&self, px: glam::Vec2, d: f32) -> (glam::Vec4, f32) {
+        let col = |m: &[[f32; 4]; 4], i: usize| glam::Vec4::from_array(m[i]);
+        let (a, b) = (&self.reproject_scaled, &self.reproject_fixed);
+        let pc = d * ((col(a, 0) * px.x + col(a, 1) * px.y) + col(a, 2))
+            + ((col(b, 0) * px.x + col(b, 1) * px.y) + col(b, 2));
+        let (ad, bd) = (col(a, 3), col(b, 3));
+        let prev_d =
+            d * ((px.x * ad.x + px.y * ad.y) + ad.z) + ((px.x * bd.x + px.y * bd.y) + bd.z);
+        (pc, prev_d)
+    }
+
     /// The uniform for `current` after `previous` (the same camera on a first frame).
     pub fn new(
         camera: &Camera,
@@ -205,12 +269,16 @@ impl FrameUniform {
         counts: (u32, u32, u32),
     ) -> Self {
         let (near, far) = camera.depth_range();
+        let (reproject_scaled, reproject_fixed) =
+            reprojection(current, previous, width, height, camera.is_orthographic());
         FrameUniform {
             view: current.view.to_cols_array_2d(),
             proj: current.proj.to_cols_array_2d(),
             inv_view: current.view.inverse().to_cols_array_2d(),
             prev_view: previous.view.to_cols_array_2d(),
             prev_view_proj: (previous.proj * previous.view).to_cols_array_2d(),
+            reproject_scaled,
+            reproject_fixed,
             width,
             height,
             near,

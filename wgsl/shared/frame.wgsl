@@ -5,6 +5,10 @@ struct Frame {
     inv_view: mat4x4<f32>,
     prev_view: mat4x4<f32>,
     prev_view_proj: mat4x4<f32>,
+    // A fragment's previous clip position and view depth, affine in (d x, d y, d) and (x, y, 1):
+    // see `reproject`.
+    reproject_scaled: mat4x4<f32>,
+    reproject_fixed: mat4x4<f32>,
     width: u32,
     height: u32,
     near: f32,
@@ -34,4 +38,20 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
         return vec3<f32>((ndc.x - f.proj[3].x) / f.proj[0].x, (ndc.y - f.proj[3].y) / f.proj[1].y, -d);
     }
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
+}
+
+// Where the surface at view depth d seen through pixel coordinate px was in the previous frame:
+// its clip position and view depth.
+// `FrameUniform::reproject` in src/frame/mod.rs is the same on the CPU.
+struct Reprojected {
+    clip: vec4<f32>,
+    depth: f32,
+}
+
+fn reproject(f: Frame, px: vec2<f32>, d: f32) -> Reprojected {
+    let a = f.reproject_scaled;
+    let b = f.reproject_fixed;
+    let clip = d * ((a[0] * px.x + a[1] * px.y) + a[2]) + ((b[0] * px.x + b[1] * px.y) + b[2]);
+    let depth = d * ((px.x * a[3].x + px.y * a[3].y) + a[3].z) + ((px.x * b[3].x + px.y * b[3].y) + b[3].z);
+    return Reprojected(clip, depth);
 }

@@ -28,6 +28,16 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 }
 #endif
 #if WRITE_L1
+// Whether the fragment could still lower layer 1's word (the early test alone): checked before
+// the layer-1 acceptance test, which may cost more than the test (a reprojection).
+fn vis1_may_take(p: u32, depth: f32, id: u32) -> bool {
+#if EARLY_TEST
+    return atomicLoad(&vis1[p]) > vis_pack(depth, id);
+#else
+    return true;
+#endif
+}
+
 fn vis1_write(p: u32, depth: f32, id: u32) {
     let word = vis_pack(depth, id);
 #if EARLY_TEST
@@ -55,6 +65,14 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 }
 #endif
 #if WRITE_L1
+fn vis1_may_take(p: u32, depth: f32, id: u32) -> bool {
+#if DEPTH_PHASE
+    return atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth);
+#else
+    return atomicLoad(&vis1[2u * p + 1u]) == bitcast<u32>(depth) && atomicLoad(&vis1[2u * p]) > id;
+#endif
+}
+
 fn vis1_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
     if atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth) {
