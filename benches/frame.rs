@@ -224,7 +224,11 @@ fn main() {
         .expect("a GPU adapter (or lavapipe) for the benchmarks");
     let groups = common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution");
     let mut c = Criterion::default().configure_from_args();
-    let mut out = format!("Device: {}\n\n", gpu.describe());
+    let mut out = format!(
+        "Device: {}\nAt the start: {}\n\n",
+        gpu.describe(),
+        deep_gbuffer::gpu::describe_load()
+    );
     for group in &groups {
         match group.as_str() {
             "passes" => passes(&mut c, &gpu, &mut out),
@@ -234,5 +238,6 @@ fn main() {
         }
     }
     c.final_summary();
+    out += &format!("At the end: {}\n", deep_gbuffer::gpu::describe_load());
     common::write_summary("frame-bench.md", &out);
 }

@@ -175,6 +175,7 @@ fn main() {
         .expect("a GPU adapter (or lavapipe) for the benchmarks");
     let hw = Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements())
         .expect("a second device for the hardware baseline");
+    let load_at_start = deep_gbuffer::gpu::describe_load();
     let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
     let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,engine");
     let mut c = Criterion::default().configure_from_args();
@@ -185,8 +186,12 @@ fn main() {
     }
     c.final_summary();
 
-    let mut table =
-        format!("Device: {}\n\n| scene | pass | GPU ms |\n|---|---|---:|\n", gpu.describe());
+    let mut table = format!(
+        "Device: {}\nAt the start: {}; at the end: {}\n\n| scene | pass | GPU ms |\n|---|---|---:|\n",
+        gpu.describe(),
+        load_at_start,
+        deep_gbuffer::gpu::describe_load()
+    );
     let summary = SUMMARY.lock().unwrap();
     for (group, name, ms) in summary.iter() {
         table += &format!("| {group} | {name} | {ms:.3} |\n");

@@ -831,6 +831,8 @@ fn mean_irradiance(renderer: &Renderer, gpu: &Gpu) -> Result<f64> {
 #[derive(serde::Serialize)]
 struct TimingsFile<'a> {
     adapter: String,
+    /// The machine's load average (1, 5, 15 minutes) when the frame was timed, if known.
+    load: Option<[f32; 3]>,
     width: u32,
     height: u32,
     raster_path: &'a str,
@@ -1006,6 +1008,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         }
         let file = TimingsFile {
             adapter: gpu.adapter.get_info().name,
+            load: deep_gbuffer::gpu::load_average(),
             width: w,
             height: h,
             raster_path: renderer.raster_path(),

@@ -46,6 +46,11 @@ fn render_writes_image_layers_and_timings() {
     assert_eq!(json["width"], 64);
     assert_eq!(json["height"], 48);
     assert!(json["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    // The load the frame was timed under, where the system reports it (Linux does).
+    if cfg!(target_os = "linux") {
+        let load = json["load"].as_array().expect("a load average on Linux");
+        assert!(load.len() == 3 && load.iter().all(|v| v.as_f64().is_some_and(|v| v >= 0.0)));
+    }
     let names: Vec<&str> =
         json["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert_eq!(

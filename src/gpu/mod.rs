@@ -251,3 +251,20 @@ impl Gpu {
         format!("{} ({:?}, {} {})", i.name, i.backend, i.driver, i.driver_info)
     }
 }
+
+/// The machine's load average over 1, 5 and 15 minutes (`/proc/loadavg`), where the system
+/// reports one: a timing taken on a busy machine is slower than the device allows, and a
+/// software driver shares the CPUs with everything else.
+pub fn load_average() -> Option<[f32; 3]> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let mut it = text.split_whitespace().map(|v| v.parse::<f32>().ok());
+    Some([it.next()??, it.next()??, it.next()??])
+}
+
+/// [`load_average`] as one line ("load 1.52 1.40 1.38 (1, 5, 15 min)", or that it is unknown).
+pub fn describe_load() -> String {
+    match load_average() {
+        Some([a, b, c]) => format!("load {a:.2} {b:.2} {c:.2} (1, 5, 15 min)"),
+        None => "load unknown".into(),
+    }
+}
