@@ -498,6 +498,12 @@ fn imported_buffers_are_checked_against_their_counts() {
     b.triangle_count += 1;
     let e = SceneBuffers::import(&g.device, b.clone(), Default::default()).unwrap_err().to_string();
     assert!(e.contains("indices") && e.contains("bytes"), "{e}");
+    // The optional attributes are checked too: a tangent buffer of one vector for every vertex.
+    let mut with_tangents = uploaded.buffers().clone();
+    with_tangents.tangents = Some(with_tangents.normals.clone());
+    let e =
+        SceneBuffers::import(&g.device, with_tangents, Default::default()).unwrap_err().to_string();
+    assert!(e.contains("tangents") && e.contains("bytes"), "{e}");
     b.triangle_count = 0;
     assert!(SceneBuffers::import(&g.device, b, Default::default()).is_err());
 }

@@ -209,26 +209,10 @@ impl SceneBuffers {
         let materials: Vec<GpuMaterial> =
             scene.materials.iter().map(|m| GpuMaterial::new(m, &placed)).collect();
         let positions: Vec<f32> = scene.positions.iter().flat_map(|p| p.to_array()).collect();
-        let normals: Vec<f32> = scene
-            .normals
-            .iter()
-            .flat_map(|n| if n.is_finite() { n.to_array() } else { [0.0; 3] })
-            .collect();
-        let uvs: Vec<f32> = scene
-            .uvs
-            .iter()
-            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 2] })
-            .collect();
-        let uvs1: Vec<f32> = scene
-            .uvs1
-            .iter()
-            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 2] })
-            .collect();
-        let tangents: Vec<f32> = scene
-            .tangents
-            .iter()
-            .flat_map(|t| if t.is_finite() { t.to_array() } else { [0.0; 4] })
-            .collect();
+        let normals = finite_or_zero(&scene.normals, |n| n.is_finite().then(|| n.to_array()));
+        let uvs = finite_or_zero(&scene.uvs, |t| t.is_finite().then(|| t.to_array()));
+        let uvs1 = finite_or_zero(&scene.uvs1, |t| t.is_finite().then(|| t.to_array()));
+        let tangents = finite_or_zero(&scene.tangents, |t| t.is_finite().then(|| t.to_array()));
         let indices: Vec<u32> = scene.triangles.iter().flatten().copied().collect();
         let check = |what: &str, bytes: usize| -> Result<()> {
             let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
@@ -323,7 +307,7 @@ impl SceneBuffers {
         let v = u64::from(b.vertex_count);
         let t = u64::from(b.triangle_count);
         let m = u64::from(b.material_count);
-        for (name, buffer, needed) in [
+        let required = [
             ("positions", &b.positions, v * 12),
             ("normals", &b.normals, v * 12),
             ("uvs", &b.uvs, v * 8),
@@ -331,19 +315,11 @@ impl SceneBuffers {
             ("triangle_materials", &b.triangle_materials, t * 4),
             ("materials", &b.materials, m * std::mem::size_of::<GpuMaterial>() as u64),
             ("texels", &b.texels, 4),
-        ] {
-            if buffer.size() < needed {
-                return Err(Error::ImportedBuffer {
-                    name,
-                    message: format!("{} bytes, but the counts need {needed}", buffer.size()),
-                });
-            }
-            if !buffer.usage().contains(wgpu::BufferUsages::STORAGE) {
-                return Err(Error::ImportedBuffer { name, message: "lacks STORAGE usage".into() });
-            }
-        }
-        for (name, buffer, needed) in [("uvs1", &b.uvs1, v * 8), ("tangents", &b.tangents, v * 16)]
-        {
+        ]
+        .map(|(name, buffer, needed)| (name, Some(buffer), needed));
+        let optional =
+            [("uvs1", b.uvs1.as_ref(), v * 8), ("tangents", b.tangents.as_ref(), v * 16)];
+        for (name, buffer, needed) in required.into_iter().chain(optional) {
             let Some(buffer) = buffer else { continue };
             if buffer.size() < needed {
                 return Err(Error::ImportedBuffer {
@@ -396,4 +372,9 @@ impl SceneBuffers {
 fn light_buffer(device: &wgpu::Device, info: &SceneInfo) -> wgpu::Buffer {
     let lights: Vec<GpuLight> = info.lights.iter().map(GpuLight::new).collect();
     storage_buffer_init(device, "deep-gbuffer.scene.lights", bytemuck::cast_slice(&lights))
+}
+
+/// `values` flattened to floats, a value `f` gives none for (not finite) as zeros.
+fn finite_or_zero<T, const N: usize>(values: &[T], f: impl Fn(&T) -> Option<[f32; N]>) -> Vec<f32> {
+    values.iter().flat_map(|v| f(v).unwrap_or([0.0; N])).collect()
 }
