@@ -112,7 +112,8 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
     for (name, layer1, precision, pass) in variants {
         // Only the raster and resolve passes: obscurance has its own benchmark.
         let ao = deep_gbuffer::AoSettings { enabled: false, ..Default::default() };
-        let settings = Settings { layer1, precision, ao, ..Settings::with_size(w, h) };
+        // Both layers whatever the scene calls for (a scene without lights needs one).
+        let settings = Settings { layer1, precision, ao, layers: 2, ..Settings::with_size(w, h) };
         let mut renderer = match Renderer::new(&gpu.device, &gpu.queue, settings) {
             Ok(r) => r,
             Err(e) => {
