@@ -232,16 +232,16 @@ pub fn pixels_spanned(
     bounds: Option<(glam::Vec3, glam::Vec3)>,
     length: f32,
 ) -> f32 {
-    match camera.projection {
-        Projection::Orthographic { height: view, .. } => length * height as f32 / view,
-        Projection::Perspective { fov_y_deg, near, .. } => {
-            let Some((lo, hi)) = bounds else { return f32::INFINITY };
+    let distance = match (camera.projection, bounds) {
+        (Projection::Orthographic { .. }, _) => 1.0,
+        (Projection::Perspective { near, .. }, Some((lo, hi))) => {
             let outside = (lo - camera.eye).max(camera.eye - hi).max(glam::Vec3::ZERO).length();
-            let focal = height as f32 / (2.0 * (fov_y_deg.to_radians() * 0.5).tan());
-            let pixels = length * focal / outside.max(near);
-            if pixels.is_nan() { f32::INFINITY } else { pixels }
+            outside.max(near)
         }
-    }
+        (Projection::Perspective { .. }, None) => return f32::INFINITY,
+    };
+    let pixels = camera.pixels_of(length, distance, height);
+    if pixels.is_nan() { f32::INFINITY } else { pixels }
 }
 
 impl Plan {

@@ -469,8 +469,9 @@ impl Renderer {
     }
 
     /// The plan for `scene` seen through `camera` under this renderer's settings (what
-    /// [`encode`](Renderer::encode) will run; [`Plan::for_view`]). The first frame of a one-pass layer-1 variant rasterizes the layers in two
-    /// passes (`raster.layer0`, `raster.layer1`) instead of `raster.layers`. A shadow map an
+    /// [`encode`](Renderer::encode) will run; [`Plan::for_view`]). The first frame of a one-pass
+    /// layer-1 variant rasterizes the layers in two passes (`raster.layer0`, `raster.layer1`)
+    /// instead of `raster.layers`. A shadow map an
     /// earlier frame drew is kept while nothing it depends on changed (see
     /// [`geometry_changed`](Renderer::geometry_changed)): its pass moves to [`Plan::reused`].
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
@@ -481,16 +482,11 @@ impl Renderer {
             plan.passes.splice(i..=i, [PassId::RasterLayer0, PassId::RasterLayer1]);
         }
         if let Some(shadows) = &self.stages.shadows {
-            let (s, generation) = (&self.settings, self.geometry_generation);
+            let lights = shadows.kept(scene, &plan, &self.settings, self.geometry_generation);
             let kept: Vec<PassId> = plan
                 .passes
                 .iter()
-                .filter(|p| match p {
-                    PassId::Shadow { light, .. } => {
-                        shadows.current(*light, scene, &plan, s, generation)
-                    }
-                    _ => false,
-                })
+                .filter(|p| matches!(p, PassId::Shadow { light, .. } if lights.contains(light)))
                 .cloned()
                 .collect();
             plan.passes.retain(|p| !kept.contains(p));
@@ -584,9 +580,8 @@ impl Renderer {
     ) -> Result<CameraMatrices> {
         let s = &self.settings;
         let current = CameraMatrices::new(camera, s.width, s.height);
-        let b = scene.buffers();
-        let counts = (b.triangle_count, b.material_count, b.vertex_count);
         let previous = self.history.unwrap_or(current);
+        let counts = scene.counts();
         let uniform = FrameUniform {
             flags: FRAME_DIAGNOSTICS,
             ..FrameUniform::new(camera, current, previous, s.width, s.height, s.dz, counts)

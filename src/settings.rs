@@ -551,22 +551,23 @@ impl ShadowSettings {
         let Some((a, b)) = bounds else { return lo };
         let r = (b - a).length() * 0.5;
         let d = ((a + b) * 0.5 - camera.eye).length();
-        let n = match camera.projection {
-            crate::Projection::Perspective { fov_y_deg, .. } if d > r => {
-                height as f32 * r / (d * (fov_y_deg.to_radians() * 0.5).tan())
-            }
-            crate::Projection::Perspective { .. } => side,
-            crate::Projection::Orthographic { height: view, .. } => height as f32 * 2.0 * r / view,
-        };
+        let inside = !camera.is_orthographic() && d <= r;
+        let n = if inside { side } else { camera.pixels_of(2.0 * r, d, height) };
         let n = if n.is_finite() { n.clamp(1.0, side) } else { side };
         (n.ceil() as u32).next_power_of_two().clamp(lo, hi)
     }
 
-    /// `resolution` halved until `faces` shadow-map faces of it (8 bytes a texel, the renderer's
-    /// atlas) fit in `byte_limit` bytes (the device's largest storage binding), at least 16.
+    /// Bytes of `faces` shadow-map faces at `resolution` (a visibility word, 8 bytes, a texel).
+    pub fn atlas_bytes(resolution: u32, faces: usize) -> u64 {
+        u64::from(resolution) * u64::from(resolution) * 8 * faces as u64
+    }
+
+    /// `resolution` halved until `faces` shadow-map faces of it
+    /// ([`atlas_bytes`](ShadowSettings::atlas_bytes)) fit in `byte_limit` bytes (the device's
+    /// largest storage binding), at least 16.
     pub fn within(resolution: u32, faces: usize, byte_limit: u64) -> u32 {
         let mut r = resolution.max(16);
-        while r > 16 && u64::from(r) * u64::from(r) * 8 * faces as u64 > byte_limit {
+        while r > 16 && Self::atlas_bytes(r, faces) > byte_limit {
             r /= 2;
         }
         r

@@ -293,7 +293,7 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
     vis0_write(p, d, t);
 #endif
 #if WRITE_L1
-    if vis1_may_take(p, d, t) && layer1_accepts(pixel, d) {
+    if layer1_accepts(pixel, d) {
         vis1_write(p, d, t);
     }
 #endif
@@ -343,11 +343,22 @@ fn rejection(t: u32) -> u32 {
     return 0u;
 }
 
-// Whether material m names a texture that does not lie inside the texel buffer (resolve then
-// leaves that texture out).
-fn texture_outside(m: Material) -> bool {
+// Whether material mid names a texture that does not lie inside the texel buffer (the resolve
+// then leaves that texture out): asked only by a raster that counts diagnostics, and read field
+// by field (a whole material is 288 bytes).
+fn texture_outside(mid: u32) -> bool {
 #if WRITE_L0
-    return textures_outside(m, arrayLength(&texels));
+    if (frame.flags & FRAME_DIAGNOSTICS) == 0u {
+        return false;
+    }
+    var pending = slot_bits(materials[mid].flags);
+    var outside = false;
+    while pending != 0u && !outside {
+        let k = firstTrailingBit(pending);
+        pending &= pending - 1u;
+        outside = !texture_fits(materials[mid].slots[k], arrayLength(&texels));
+    }
+    return outside;
 #else
     return false;
 #endif
@@ -375,7 +386,7 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         count_diagnostic(rejected);
         return;
     }
-    if texture_outside(materials[tri_materials[t]]) {
+    if texture_outside(tri_materials[t]) {
         count_diagnostic(DIAG_TEXTURE);
     }
     var poly: array<ClipVertex, MAX_POLY>;

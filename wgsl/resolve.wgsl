@@ -21,7 +21,7 @@
 @group(0) @binding(7) var<storage, read> texels: array<u32>;
 @group(0) @binding(8) var<storage, read> vis: array<u32>;
 @group(0) @binding(9) var<storage, read_write> gbuffer: array<GWord>;
-// The second coordinate coord_set (2 per vertex) and the tangents (4 per vertex); a scene without
+// The second coordinate set (2 per vertex) and the tangents (4 per vertex); a scene without
 // them binds a short buffer, which reads as zero.
 @group(0) @binding(10) var<storage, read> uvs1: array<f32>;
 @group(0) @binding(11) var<storage, read> tangents: array<f32>;
@@ -100,7 +100,7 @@ fn sample_texture(t: TextureSlot, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
     return mix(top, bottom, f.y);
 }
 
-// Vertex i's coordinates in coord_set 0 or 1 (zero where the buffer holds none).
+// Vertex i's coordinates in set 0 or 1 (zero where the buffer holds none).
 fn vertex_uv(i: u32, coord_set: u32) -> vec2<f32> {
     if coord_set == 0u {
         return vec2<f32>(uvs[2u * i], uvs[2u * i + 1u]);
@@ -118,7 +118,7 @@ fn vertex_tangent(i: u32) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// The point's coordinates as slot t reads them: its coord_set interpolated, then its transform.
+// The point's coordinates as slot t reads them: its set interpolated, then its transform.
 fn slot_uv(t: TextureSlot, tri: vec3<u32>, bary: vec3<f32>) -> vec2<f32> {
     let coord_set = (t.sampler >> 5u) & 1u;
     let uv = vertex_uv(tri.x, coord_set) * bary.x + vertex_uv(tri.y, coord_set) * bary.y + vertex_uv(tri.z, coord_set) * bary.z;
@@ -258,11 +258,8 @@ fn shade(pixel: vec2<u32>) -> GSample {
         // both sides of a branch still leaves a loop whose lanes are all done).
         var texel_values: array<vec3<f32>, SLOT_COUNT>;
         var read = 0u;
-        var pending = (materials[mid].flags >> 1u) & ((1u << SLOT_COUNT) - 1u);
-        loop {
-            if pending == 0u {
-                break;
-            }
+        var pending = slot_bits(materials[mid].flags);
+        while pending != 0u {
             let k = firstTrailingBit(pending);
             pending &= pending - 1u;
             let r = read_slot(mid, k, tri, bary, k == SLOT_BASE_COLOR || k == SLOT_EMISSIVE);

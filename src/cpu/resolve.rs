@@ -100,9 +100,9 @@ impl Corners<'_> {
         )
     }
 
-    /// The texture and coordinates `slot` reads at this point, when it reads one (the texture
-    /// exists and the coordinates are finite and moderate).
-    fn read(&self, slot: Option<TextureRef>) -> Option<(&Texture, TextureRef, Vec2)> {
+    /// As `read_slot`: the texture and coordinates `slot` reads at this point, when it reads one
+    /// (the texture exists and the coordinates are finite and moderate).
+    fn read_slot(&self, slot: Option<TextureRef>) -> Option<(&Texture, TextureRef, Vec2)> {
         let slot = slot?;
         let t = self.scene.textures.get(slot.texture as usize)?;
         let uv = self.slot_uv(&slot);
@@ -125,24 +125,24 @@ pub(crate) struct MaterialSample {
 
 pub(crate) fn material_at(m: &Material, at: &Corners<'_>) -> MaterialSample {
     let mut base = m.base_color.xyz();
-    if let Some((t, slot, uv)) = at.read(m.base_color_texture) {
+    if let Some((t, slot, uv)) = at.read_slot(m.base_color_texture) {
         base *= sample_texture(t, &slot, uv, true);
     }
     let mut emissive = m.emissive;
-    if let Some((t, slot, uv)) = at.read(m.emissive_texture) {
+    if let Some((t, slot, uv)) = at.read_slot(m.emissive_texture) {
         emissive *= sample_texture(t, &slot, uv, true);
     }
     let mut roughness = m.roughness.clamp(0.0, 1.0);
     let mut metallic = m.metallic.clamp(0.0, 1.0);
     let mut reflectivity = m.reflectivity.clamp(0.0, 1.0);
-    if let Some((t, slot, uv)) = at.read(m.metallic_roughness_texture) {
+    if let Some((t, slot, uv)) = at.read_slot(m.metallic_roughness_texture) {
         let mr = sample_texture(t, &slot, uv, false);
         roughness = (roughness * mr.y).clamp(0.0, 1.0);
         metallic = (metallic * mr.z).clamp(0.0, 1.0);
         reflectivity = metallic * (1.0 - roughness);
     }
     let mut occlusion = 1.0;
-    if let Some((t, slot, uv)) = at.read(m.occlusion_texture) {
+    if let Some((t, slot, uv)) = at.read_slot(m.occlusion_texture) {
         let strength = m.occlusion_strength.clamp(0.0, 1.0);
         occlusion =
             (1.0 + strength * (sample_texture(t, &slot, uv, false).x - 1.0)).clamp(0.0, 1.0);
@@ -161,7 +161,7 @@ pub(crate) fn material_at(m: &Material, at: &Corners<'_>) -> MaterialSample {
 /// point (the frame of the interpolated vertex tangents, or where they are missing the
 /// triangle's own texture-space frame); `n` where `m` has no normal texture or no frame exists.
 pub(crate) fn normal_mapped(m: &Material, at: &Corners<'_>, n: Vec3) -> Vec3 {
-    let Some((texture, slot, uv)) = at.read(m.normal_texture) else { return n };
+    let Some((texture, slot, uv)) = at.read_slot(m.normal_texture) else { return n };
     let c = sample_texture(texture, &slot, uv, false);
     let scene = at.scene;
     let tangent = |i: usize| scene.tangents.get(i).copied().filter(|t| t.is_finite());

@@ -12,10 +12,10 @@ use super::direct::ShadowInputs;
 use super::fill::Fill;
 use super::raster::{Draw, RasterMode};
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::{FrameUniform, ShadowFace, light_faces};
+use crate::frame::{FrameUniform, LightFaces, ShadowFace, light_faces};
 use crate::gpu;
 use crate::plan::{PassId, Plan};
-use crate::settings::Settings;
+use crate::settings::{Settings, ShadowSettings};
 use crate::{Error, Result, SceneBuffers};
 
 /// One shadow-casting light's faces in the atlas.
@@ -50,27 +50,16 @@ impl Drawn {
     }
 }
 
-/// The shadow passes of `plan`, drawn and reused, in light order.
-fn shadow_passes(plan: &Plan) -> Vec<PassId> {
-    let mut key: Vec<PassId> = plan
-        .passes
-        .iter()
-        .chain(&plan.reused)
-        .filter(|p| matches!(p, PassId::Shadow { .. }))
-        .cloned()
-        .collect();
-    key.sort_by_key(|p| match p {
-        PassId::Shadow { light, .. } => *light,
-        _ => 0,
-    });
-    key
+/// The lights whose shadow maps `plan` draws or reuses, in light order.
+fn key(plan: &Plan) -> Vec<(usize, String)> {
+    plan.shadow_lights().into_iter().map(|(light, name)| (light, name.to_owned())).collect()
 }
 
 /// The faces of every shadow-casting light: a visibility buffer and a camera per face, the
 /// faces' lookup constants and the atlas.
 pub(crate) struct ShadowStage {
-    /// The plan's shadow passes this stage was made for (it is remade when they change).
-    key: Vec<PassId>,
+    /// The plan's shadow lights this stage was made for (it is remade when they change).
+    key: Vec<(usize, String)>,
     resolution: u32,
     groups: Vec<Group>,
     face_uniforms: Vec<wgpu::Buffer>,
@@ -90,7 +79,7 @@ impl ShadowStage {
         scene: &SceneBuffers,
         plan: &Plan,
     ) -> Result<ShadowStage> {
-        let key = shadow_passes(plan);
+        let key = key(plan);
         match kept {
             Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => {
                 Ok(stage)
@@ -103,10 +92,10 @@ impl ShadowStage {
         device: &wgpu::Device,
         s: &Settings,
         scene: &SceneBuffers,
-        key: Vec<PassId>,
+        key: Vec<(usize, String)>,
     ) -> Result<ShadowStage> {
         let res = s.shadows.resolution;
-        let face_bytes = u64::from(res) * u64::from(res) * 8;
+        let face_bytes = ShadowSettings::atlas_bytes(res, 1);
         let info = scene.info();
         let groups: Vec<Group> = light_faces(info, res, (0, 0, 0))
             .iter()
@@ -155,14 +144,16 @@ impl ShadowStage {
         })
     }
 
+    /// Every shadow-casting light's faces of `scene` at this stage's resolution.
+    fn faces_of(&self, scene: &SceneBuffers) -> Vec<LightFaces> {
+        light_faces(scene.info(), self.resolution, scene.counts())
+    }
+
     /// Writes every face's camera (lights or bounds may have changed).
     pub(crate) fn prepare(&self, queue: &wgpu::Queue, scene: &SceneBuffers) {
-        let info = scene.info();
-        let b = scene.buffers();
-        let counts = (b.triangle_count, b.material_count, b.vertex_count);
         let mut faces = Vec::new();
-        let mut light_faces_words = vec![[0u32; 2]; info.lights.len().max(2)];
-        for group in light_faces(info, self.resolution, counts) {
+        let mut light_faces_words = vec![[0u32; 2]; scene.info().lights.len().max(2)];
+        for group in self.faces_of(scene) {
             light_faces_words[group.light] = [group.first as u32, group.faces.len() as u32];
             for (k, (uniform, face)) in group.faces.into_iter().enumerate() {
                 let buffer = &self.face_uniforms[group.first + k];
@@ -176,37 +167,32 @@ impl ShadowStage {
         queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces_words));
     }
 
-    /// Whether `light`'s faces, drawn by an earlier frame, still hold for `scene` under `plan`
-    /// (its shadow passes, drawn or not, as [`Plan::new`] lists them) and `s`.
-    pub(crate) fn current(
+    /// The lights of `plan` whose faces, drawn by an earlier frame, still hold for `scene` under
+    /// `s` and the geometry `generation`.
+    pub(crate) fn kept(
         &self,
-        light: usize,
         scene: &SceneBuffers,
         plan: &Plan,
         s: &Settings,
         generation: u64,
-    ) -> bool {
-        if self.key != shadow_passes(plan) || self.resolution != s.shadows.resolution {
-            return false;
+    ) -> Vec<usize> {
+        if self.key != key(plan) || self.resolution != s.shadows.resolution {
+            return Vec::new();
         }
-        let Some(drawn) =
-            self.groups.iter().find(|g| g.light == light).and_then(|g| g.drawn.as_ref())
-        else {
-            return false;
-        };
-        let b = scene.buffers();
-        let counts = (b.triangle_count, b.material_count, b.vertex_count);
-        light_faces(scene.info(), self.resolution, counts)
+        self.faces_of(scene)
             .iter()
-            .find(|g| g.light == light)
-            .is_some_and(|g| *drawn == Drawn::new(scene, &g.faces, generation))
+            .filter(|faces| {
+                self.groups.iter().find(|g| g.light == faces.light).is_some_and(|g| {
+                    g.drawn.as_ref() == Some(&Drawn::new(scene, &faces.faces, generation))
+                })
+            })
+            .map(|faces| faces.light)
+            .collect()
     }
 
     /// Notes that the frame just recorded drew the faces of `plan`'s shadow passes.
     pub(crate) fn drew(&mut self, scene: &SceneBuffers, plan: &Plan, generation: u64) {
-        let b = scene.buffers();
-        let counts = (b.triangle_count, b.material_count, b.vertex_count);
-        for faces in light_faces(scene.info(), self.resolution, counts) {
+        for faces in self.faces_of(scene) {
             let drawn = plan
                 .passes
                 .iter()

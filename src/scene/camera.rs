@@ -104,6 +104,19 @@ impl Camera {
         }
     }
 
+    /// How many pixels of an image `height` pixels tall a world-space `length` spans, facing
+    /// the camera at view distance `distance`: `length * height / (2 distance tan(fov_y / 2))`
+    /// for a perspective camera, `length * height / view height` at any distance for an
+    /// orthographic one.
+    pub fn pixels_of(&self, length: f32, distance: f32, height: u32) -> f32 {
+        match self.projection {
+            Projection::Perspective { fov_y_deg, .. } => {
+                length * height as f32 / (2.0 * distance * (fov_y_deg.to_radians() * 0.5).tan())
+            }
+            Projection::Orthographic { height: view, .. } => length * height as f32 / view,
+        }
+    }
+
     /// Whether the projection is orthographic.
     pub fn is_orthographic(&self) -> bool {
         matches!(self.projection, Projection::Orthographic { .. })

@@ -51,12 +51,19 @@ const READ_EXTENSIONS: [&str; 3] =
 const TRANSFORM: &str = "KHR_texture_transform";
 
 /// `KHR_texture_transform` of one texture reference.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Transform {
     offset: [f32; 2],
     rotation: f32,
     scale: [f32; 2],
     tex_coord: Option<u32>,
+}
+
+impl Default for Transform {
+    /// No transform: the extension's defaults.
+    fn default() -> Self {
+        Transform { offset: [0.0; 2], rotation: 0.0, scale: [1.0; 2], tex_coord: None }
+    }
 }
 
 impl Transform {
@@ -69,7 +76,7 @@ impl Transform {
                 .and_then(|a| Some([a[0].as_f64()? as f32, a[1].as_f64()? as f32]))
                 .unwrap_or(default)
         };
-        let Some(v) = value else { return Transform { scale: [1.0; 2], ..Transform::default() } };
+        let Some(v) = value else { return Transform::default() };
         Transform {
             offset: pair(v.get("offset"), [0.0; 2]),
             rotation: v.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32,
@@ -106,15 +113,12 @@ impl<'a> Reference<'a> {
     }
 
     fn of_info(info: gltf::texture::Info<'a>) -> Self {
-        let transform = info.texture_transform().map_or(
-            Transform { scale: [1.0; 2], ..Transform::default() },
-            |t| Transform {
-                offset: t.offset(),
-                rotation: t.rotation(),
-                scale: t.scale(),
-                tex_coord: t.tex_coord(),
-            },
-        );
+        let transform = info.texture_transform().map_or(Transform::default(), |t| Transform {
+            offset: t.offset(),
+            rotation: t.rotation(),
+            scale: t.scale(),
+            tex_coord: t.tex_coord(),
+        });
         Reference { texture: info.texture(), tex_coord: info.tex_coord(), transform }
     }
 
@@ -360,39 +364,22 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
                     .get(material as usize)
                     .and_then(|m| m.normal_texture)
                     .map(|t| t.tex_coord);
-                let generated = match normal_set {
-                    Some(set) if tangents.is_empty() => {
-                        let (main, other) = if set == 1 { (&uvs1, &uvs) } else { (&uvs, &uvs1) };
-                        let v = super::tangents::Vertices {
-                            positions: positions.clone(),
-                            normals: normals.clone(),
-                            uvs: main.clone(),
-                            uvs_other: other.clone(),
-                            tangents: Vec::new(),
-                        };
-                        catch_quietly(|| super::tangents::generate(&v, &indices))
-                            .ok()
-                            .flatten()
-                            .map(|(v, indices)| {
-                                let (main, other) = if set == 1 {
-                                    (v.uvs_other, v.uvs)
-                                } else {
-                                    (v.uvs, v.uvs_other)
-                                };
-                                (v.positions, v.normals, main, other, v.tangents, indices)
-                            })
-                    }
-                    _ => None,
-                };
-                let (positions, normals, uvs, uvs1, tangents, indices) =
-                    generated.unwrap_or((positions, normals, uvs, uvs1, tangents, indices));
+                let mut v =
+                    super::tangents::Vertices { positions, normals, uvs: [uvs, uvs1], tangents };
+                let mut indices = indices;
+                if let Some(set) = normal_set.filter(|_| v.tangents.is_empty())
+                    && let Ok(Some(welded)) =
+                        catch_quietly(|| super::tangents::generate(&v, &indices, set as usize))
+                {
+                    (v, indices) = welded;
+                }
                 scene
                     .push_mesh(MeshData {
-                        positions: &positions,
-                        normals: &normals,
-                        uvs: &uvs,
-                        uvs1: &uvs1,
-                        tangents: &tangents,
+                        positions: &v.positions,
+                        normals: &v.normals,
+                        uvs: &v.uvs[0],
+                        uvs1: &v.uvs[1],
+                        tangents: &v.tangents,
                         indices: &indices,
                         material,
                     })

@@ -7,21 +7,21 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-/// One indexed triangle mesh's vertex attributes.
+/// One indexed triangle mesh's vertex attributes (coordinate sets and tangents: empty or one
+/// per position).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Vertices {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
-    /// The coordinate set the tangents follow.
-    pub uvs: Vec<Vec2>,
-    /// Further per-vertex attributes carried along when vertices are split.
-    pub uvs_other: Vec<Vec2>,
-    /// Filled in by [`generate`].
+    /// Coordinate sets 0 and 1.
+    pub uvs: [Vec<Vec2>; 2],
     pub tangents: Vec<Vec4>,
 }
 
 struct Corners<'a> {
     v: &'a Vertices,
+    /// The coordinate set the tangents follow.
+    uvs: &'a [Vec2],
     indices: &'a [u32],
     out: Vec<Vec4>,
 }
@@ -40,7 +40,7 @@ impl bevy_mikktspace::Geometry for Corners<'_> {
         self.v.normals[self.indices[face * 3 + vert] as usize].to_array()
     }
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-        self.v.uvs[self.indices[face * 3 + vert] as usize].to_array()
+        self.uvs[self.indices[face * 3 + vert] as usize].to_array()
     }
     fn set_tangent(
         &mut self,
@@ -52,27 +52,28 @@ impl bevy_mikktspace::Geometry for Corners<'_> {
     }
 }
 
-/// Tangents for `v` (positions, normals and `uvs`, one each per vertex) and `indices` (three per
-/// triangle): the vertices split where corners of one vertex get different tangents, the new
-/// indices, and in `tangents` the tangent with the bitangent's sign in glTF's convention
-/// (`bitangent = cross(normal, tangent) * w`, texture coordinates with v running down the
-/// image, hence MikkTSpace's sign negated). `None` when the attributes do not allow it (missing
-/// or non-finite values, no triangle) or MikkTSpace fails.
-pub(crate) fn generate(v: &Vertices, indices: &[u32]) -> Option<(Vertices, Vec<u32>)> {
+/// Tangents for `v` (positions, normals and coordinate set `set`, one each per vertex) and
+/// `indices` (three per triangle): the vertices split where corners of one vertex get different
+/// tangents, the new indices, and in `tangents` the tangent with the bitangent's sign in glTF's
+/// convention (`bitangent = cross(normal, tangent) * w`, texture coordinates with v running down
+/// the image, hence MikkTSpace's sign negated). `None` when the attributes do not allow it
+/// (missing or non-finite values, no triangle) or MikkTSpace fails.
+pub(crate) fn generate(v: &Vertices, indices: &[u32], set: usize) -> Option<(Vertices, Vec<u32>)> {
     let n = v.positions.len();
+    let uvs = v.uvs.get(set)?;
     let complete = v.normals.len() == n
-        && v.uvs.len() == n
-        && (v.uvs_other.is_empty() || v.uvs_other.len() == n)
+        && uvs.len() == n
+        && v.uvs.iter().all(|u| u.is_empty() || u.len() == n)
         && !indices.is_empty()
         && indices.len().is_multiple_of(3)
         && indices.iter().all(|&i| (i as usize) < n)
         && v.positions.iter().all(|p| p.is_finite())
         && v.normals.iter().all(|p| p.is_finite())
-        && v.uvs.iter().all(|p| p.is_finite());
+        && uvs.iter().all(|p| p.is_finite());
     if !complete {
         return None;
     }
-    let mut corners = Corners { v, indices, out: vec![Vec4::ZERO; indices.len()] };
+    let mut corners = Corners { v, uvs, indices, out: vec![Vec4::ZERO; indices.len()] };
     bevy_mikktspace::generate_tangents(&mut corners).ok()?;
     // Weld corners that share a vertex and a tangent.
     let mut out = Vertices::default();
@@ -85,9 +86,10 @@ pub(crate) fn generate(v: &Vertices, indices: &[u32]) -> Option<(Vertices, Vec<u
             let k = i as usize;
             out.positions.push(v.positions[k]);
             out.normals.push(v.normals[k]);
-            out.uvs.push(v.uvs[k]);
-            if !v.uvs_other.is_empty() {
-                out.uvs_other.push(v.uvs_other[k]);
+            for (welded, source) in out.uvs.iter_mut().zip(&v.uvs) {
+                if !source.is_empty() {
+                    welded.push(source[k]);
+                }
             }
             out.tangents.push(t);
             out.positions.len() as u32 - 1
@@ -113,15 +115,18 @@ mod tests {
                 Vec3::new(-1.0, 1.0, 0.0),
             ],
             normals: vec![Vec3::Z; 4],
-            uvs: vec![
-                Vec2::new(0.0, 1.0),
-                Vec2::new(1.0, 1.0),
-                Vec2::new(1.0, 0.0),
-                Vec2::new(0.0, 0.0),
+            uvs: [
+                vec![
+                    Vec2::new(0.0, 1.0),
+                    Vec2::new(1.0, 1.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(0.0, 0.0),
+                ],
+                vec![],
             ],
             ..Vertices::default()
         };
-        let (out, indices) = generate(&v, &[0, 1, 2, 0, 2, 3]).unwrap();
+        let (out, indices) = generate(&v, &[0, 1, 2, 0, 2, 3], 0).unwrap();
         assert_eq!(out.positions.len(), 4, "one tangent per vertex: nothing to split");
         assert_eq!(indices.len(), 6);
         for t in &out.tangents {
@@ -129,16 +134,19 @@ mod tests {
             assert_eq!(t.w, 1.0);
         }
         // Mirrored in u: the tangent turns to -x and the sign flips, the bitangent stays +y.
+        // Read through set 1, set 0 left as it was and carried along.
         let mirrored = Vertices {
-            uvs: v.uvs.iter().map(|t| Vec2::new(1.0 - t.x, t.y)).collect(),
+            uvs: [v.uvs[0].clone(), v.uvs[0].iter().map(|t| Vec2::new(1.0 - t.x, t.y)).collect()],
             ..v.clone()
         };
-        let (out, _) = generate(&mirrored, &[0, 1, 2, 0, 2, 3]).unwrap();
+        let (out, _) = generate(&mirrored, &[0, 1, 2, 0, 2, 3], 1).unwrap();
+        assert_eq!(out.uvs[0], v.uvs[0]);
         for t in &out.tangents {
             assert!((t.truncate() + Vec3::X).length() < 1e-5, "{t}");
             assert!((Vec3::Z.cross(t.truncate()) * t.w - Vec3::Y).length() < 1e-5);
         }
         // Incomplete attributes give none.
-        assert!(generate(&Vertices { normals: vec![], ..v }, &[0, 1, 2]).is_none());
+        assert!(generate(&Vertices { normals: vec![], ..v.clone() }, &[0, 1, 2], 0).is_none());
+        assert!(generate(&v, &[0, 1, 2], 1).is_none(), "no set 1");
     }
 }

@@ -367,6 +367,11 @@ impl SceneBuffers {
     pub fn triangle_count(&self) -> u32 {
         self.b.triangle_count
     }
+
+    /// (triangles, materials, vertices): the counts a raster's frame uniform carries.
+    pub(crate) fn counts(&self) -> (u32, u32, u32) {
+        (self.b.triangle_count, self.b.material_count, self.b.vertex_count)
+    }
 }
 
 fn light_buffer(device: &wgpu::Device, info: &SceneInfo) -> wgpu::Buffer {

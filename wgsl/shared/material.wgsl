@@ -38,22 +38,13 @@ const SLOT_NORMAL: u32 = 3u;
 const SLOT_OCCLUSION: u32 = 4u;
 const SLOT_COUNT: u32 = 5u;
 
-// Whether material m uses texture slot k and its texture lies inside a texel buffer of
-// texel_count texels (checked without overflow: the host's materials are not checked by the CPU).
-fn uses_texture(m: Material, k: u32, texel_count: u32) -> bool {
-    return (m.flags & (2u << k)) != 0u && texture_fits(m.slots[k], texel_count);
+// The texture slots a material's flags say it uses, as bits 0..SLOT_COUNT-1.
+fn slot_bits(flags: u32) -> u32 {
+    return (flags >> 1u) & ((1u << SLOT_COUNT) - 1u);
 }
 
-// Whether material m names a texture that does not lie inside a texel buffer of texel_count
-// texels (the resolve then leaves that texture out).
-fn textures_outside(m: Material, texel_count: u32) -> bool {
-    var outside = false;
-    for (var k = 0u; k < SLOT_COUNT; k++) {
-        outside = outside || ((m.flags & (2u << k)) != 0u && !texture_fits(m.slots[k], texel_count));
-    }
-    return outside;
-}
-
+// Whether texture slot t lies inside a texel buffer of texel_count texels (checked without
+// overflow: the host's materials are not checked by the CPU).
 fn texture_fits(t: TextureSlot, texel_count: u32) -> bool {
     let w = t.width;
     let h = t.height;

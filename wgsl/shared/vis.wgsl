@@ -5,8 +5,9 @@
 // atomics: DEPTH_PHASE takes the minimum depth, then the id phase the minimum id at that depth.
 // Both give the same words. Each write first reads the word and leaves when it cannot lower it
 // (the early depth test; on the 64-bit path only with EARLY_TEST, which needs 64-bit atomic
-// loads): words only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage pointers to functions, so the writes name
-// the bindings `vis0` and `vis1` (declared under WRITE_L0 and WRITE_L1 by the including kernel).
+// loads): words only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage
+// pointers to functions, so the writes name the bindings `vis0` and `vis1` (declared under
+// WRITE_L0 and WRITE_L1 by the including kernel), and each has its own copy.
 
 const VIS_EMPTY: u32 = 0xffffffffu;
 
@@ -28,16 +29,6 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 }
 #endif
 #if WRITE_L1
-// Whether the fragment could still lower layer 1's word (the early test alone): checked before
-// the layer-1 acceptance test, which may cost more than the test (a reprojection).
-fn vis1_may_take(p: u32, depth: f32, id: u32) -> bool {
-#if EARLY_TEST
-    return atomicLoad(&vis1[p]) > vis_pack(depth, id);
-#else
-    return true;
-#endif
-}
-
 fn vis1_write(p: u32, depth: f32, id: u32) {
     let word = vis_pack(depth, id);
 #if EARLY_TEST
@@ -65,14 +56,6 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 }
 #endif
 #if WRITE_L1
-fn vis1_may_take(p: u32, depth: f32, id: u32) -> bool {
-#if DEPTH_PHASE
-    return atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth);
-#else
-    return atomicLoad(&vis1[2u * p + 1u]) == bitcast<u32>(depth) && atomicLoad(&vis1[2u * p]) > id;
-#endif
-}
-
 fn vis1_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
     if atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth) {
