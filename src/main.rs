@@ -117,6 +117,10 @@ struct SweepArgs {
     /// Obscurance pyramid level offsets to sweep (a tap at h pixels reads level log2 h - offset).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().mip_offset))]
     mip_offset: Vec<u32>,
+    /// Radiosity gather source level offsets to sweep (a tap at h pixels reads level log2 h -
+    /// offset).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_mip_offset))]
+    radiosity_mip_offset: Vec<u32>,
     /// Layer separations Δz to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
@@ -254,6 +258,10 @@ struct RadiosityArgs {
     /// Slices per pixel of the slices gather [default: 2].
     #[arg(long)]
     radiosity_slices: Option<u32>,
+    /// A radiosity tap h pixels away reads level floor(log2 h) - this of the gather source,
+    /// 0 to 8 [default: 4].
+    #[arg(long)]
+    radiosity_mip_offset: Option<u32>,
 }
 
 impl RadiosityArgs {
@@ -263,6 +271,7 @@ impl RadiosityArgs {
         r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
+        r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
     }
 }
 
@@ -671,6 +680,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         precision: args.precision,
         radiosity_radius: args.radiosity_radius,
         mip_offset: args.mip_offset,
+        radiosity_mip_offset: args.radiosity_mip_offset,
         dz: args.dz,
         layer1: args.layer1,
         scale: args.scale,

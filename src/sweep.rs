@@ -55,6 +55,8 @@ pub struct Knobs {
     pub radiosity_radius: f32,
     /// Obscurance pyramid level offset ([`AoSettings::mip_offset`]).
     pub mip_offset: u32,
+    /// Radiosity gather source level offset ([`RadiositySettings::mip_offset`]).
+    pub radiosity_mip_offset: u32,
     /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
     pub dz: f32,
     /// How layer 1 is rasterized.
@@ -84,6 +86,7 @@ impl Knobs {
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
+                mip_offset: self.radiosity_mip_offset,
                 ..RadiositySettings::default()
             },
             timings: true,
@@ -129,6 +132,8 @@ pub struct Grid {
     pub radiosity_radius: Vec<f32>,
     /// Obscurance pyramid level offsets.
     pub mip_offset: Vec<u32>,
+    /// Radiosity gather source level offsets.
+    pub radiosity_mip_offset: Vec<u32>,
     /// Layer separations.
     pub dz: Vec<f32>,
     /// Layer-1 variants.
@@ -149,6 +154,7 @@ impl Default for Grid {
             precision: vec![Precision::Full],
             radiosity_radius: vec![settings.radiosity.radius],
             mip_offset: vec![settings.ao.mip_offset],
+            radiosity_mip_offset: vec![settings.radiosity.mip_offset],
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
@@ -182,6 +188,7 @@ impl Grid {
             precision: settings.precision,
             radiosity_radius: settings.radiosity.radius,
             mip_offset: settings.ao.mip_offset,
+            radiosity_mip_offset: settings.radiosity.mip_offset,
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
@@ -191,6 +198,7 @@ impl Grid {
         let k = times(k, &self.layer1, |k, v| k.layer1 = v);
         let k = times(k, &self.dz, |k, v| k.dz = v);
         let k = times(k, &self.mip_offset, |k, v| k.mip_offset = v);
+        let k = times(k, &self.radiosity_mip_offset, |k, v| k.radiosity_mip_offset = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -466,7 +474,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -487,7 +495,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -496,6 +504,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.precision,
             k.radiosity_radius,
             k.mip_offset,
+            k.radiosity_mip_offset,
             k.dz,
             k.layer1,
             k.scale
@@ -545,12 +554,13 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 8] = [
+    let optional: [Column; 9] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
+        ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
         ("Δz", |k| k.dz.to_string()),
         ("layer 1", |k| format!("{:?}", k.layer1)),
         ("scale", |k| k.scale.to_string()),

@@ -95,10 +95,15 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
             assert!(v.iter().all(|x| x.w <= 1.0), "{what}: {name} confidence above 1");
             values.push(v);
         }
-        let largest_b =
-            values[0].iter().chain(&values[1]).fold(Vec3::ZERO, |m, b| m.max(b.truncate()));
+        let source: Vec<deep_gbuffer::frame::SourceTexel> = bytemuck::pod_collect_to_vec(
+            &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, buffers.source).unwrap(),
+        );
+        let radiance = source.iter().flat_map(|t| [t.radiance(0), t.radiance(1)]);
+        let b: Vec<Vec4> = radiance.map(|b| b.extend(0.0)).collect();
+        finite_nonneg("B", &b);
+        let largest_b = b.iter().fold(Vec3::ZERO, |m, b| m.max(b.truncate()));
         let bound = PI * largest_b * (1.0 + BOUND_SLACK);
-        for (p, e) in values[2].iter().enumerate() {
+        for (p, e) in values[0].iter().enumerate() {
             assert!(
                 e.truncate().cmple(bound).all(),
                 "{what}: gathered irradiance {e} at pixel {p} above pi max B = {bound}"

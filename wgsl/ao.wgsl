@@ -37,6 +37,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/spiral.wgsl"
 #include "shared/slices.wgsl"
+#include "shared/mip.wgsl"
 
 // Mirrors `AoUniform` in src/frame/uniforms.rs.
 struct Ao {
@@ -66,25 +67,6 @@ struct Ao {
 
 fn level_offset(level: u32) -> u32 {
     return ao.offsets[level / 4u][level % 4u];
-}
-
-fn level_size(level: u32) -> vec2<u32> {
-    var size = vec2<u32>(frame.width, frame.height);
-    for (var i = 0u; i < level; i++) {
-        size = (size + 1u) / 2u;
-    }
-    return size;
-}
-
-// The full-resolution pixel whose depth texel t of `level` holds (the rotated-grid choices of
-// wgsl/pyramid.wgsl followed back down), so a tap's point is reconstructed where it really is.
-fn texel_origin(level: u32, t: vec2<u32>) -> vec2<u32> {
-    var p = t;
-    for (var l = level; l > 0u; l--) {
-        let below = level_size(l - 1u);
-        p = min(vec2<u32>(2u * p.x + ((p.y & 1u) ^ 1u), 2u * p.y + ((p.x & 1u) ^ 1u)), below - 1u);
-    }
-    return p;
 }
 
 fn normal_at(p: u32) -> vec3<f32> {
@@ -122,14 +104,12 @@ fn centre(pixel: vec2<u32>) -> Centre {
 
 // The pyramid texel of `level` under pixel `tap`: its index and the pixel centre it came from.
 fn pyramid_texel(tap: vec2<i32>, level: u32, index: ptr<function, u32>) -> vec2<f32> {
-    let t = vec2<u32>(tap) >> vec2<u32>(level);
-    *index = level_offset(level) + t.y * level_size(level).x + t.x;
-    return vec2<f32>(texel_origin(level, t)) + 0.5;
+    return mip_texel(tap, level, level_offset(level), index);
 }
 
 // The pyramid level a tap h pixels away reads: floor(log2 h) - mip_offset, at most `coarsest`.
 fn tap_level(h: f32, coarsest: u32) -> u32 {
-    return u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(ao.mip_offset), 0, i32(coarsest)));
+    return mip_level(h, ao.mip_offset, coarsest);
 }
 
 fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
@@ -163,7 +143,7 @@ fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> 
     let slices = max(ao.slices, 1u);
     let steps = max(ao.samples / (2u * slices), 1u);
     let spacing = r_px / f32(steps);
-    let level = u32(clamp(i32(floor(log2(max(spacing, 1.0)))), 0, i32(ao.levels) - 1));
+    let level = mip_coarsest(spacing, ao.levels);
     let noise = slice_noise(pixel, 0u);
     let r2 = ao.radius * ao.radius;
     var total = 0.0;

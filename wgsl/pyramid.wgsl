@@ -1,8 +1,7 @@
 // Depth pyramids: camera-space (view) depth MIP chains of one G-buffer layer. Level 0 copies the
 // G-buffer's view depth (pyramid_base). 0 marks "no surface".
-// - pyramid_level, as in Scalable Ambient Obscurance: level l + 1 takes one texel of each 2x2
-//   block of level l in a rotated-grid pattern, so every level holds real depths (no averages
-//   across edges) and the choice varies from block to block. The obscurance reads it.
+// - pyramid_level: the rotated grid of shared/level.wgsl (one real depth of each 2x2 block). The
+//   obscurance reads it.
 // - pyramid_nearest: level l + 1 holds the nearest depth of its 2x2 block (0 only where all four
 //   are empty), so texel (x, y) of level l bounds every pixel in [x, x + 1) x [y, y + 1) times
 //   2^l from the front. The reflections' hierarchical march reads it.
@@ -11,17 +10,7 @@
 // defines: PACKED
 
 #include "shared/gbuffer.wgsl"
-
-struct PyramidLevel {
-    src_offset: u32,
-    src_width: u32,
-    src_height: u32,
-    dst_offset: u32,
-    dst_width: u32,
-    dst_height: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
+#include "shared/level.wgsl"
 
 @group(0) @binding(0) var<uniform> level: PyramidLevel;
 @group(0) @binding(1) var<storage, read> gbuffer: array<GWord>;
@@ -41,10 +30,7 @@ fn pyramid_level(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= level.dst_width || gid.y >= level.dst_height {
         return;
     }
-    // Rotated grid: (1, 1), (0, 1), (1, 0) or (0, 0) of the 2x2 block by the parity of x and y.
-    let sx = min(2u * gid.x + ((gid.y & 1u) ^ 1u), level.src_width - 1u);
-    let sy = min(2u * gid.y + ((gid.x & 1u) ^ 1u), level.src_height - 1u);
-    pyramid[level.dst_offset + gid.y * level.dst_width + gid.x] = pyramid[level.src_offset + sy * level.src_width + sx];
+    pyramid[level.dst_offset + gid.y * level.dst_width + gid.x] = pyramid[rotated_grid_pick(level, gid.xy)];
 }
 
 // The nearer of two depths, 0 (no surface) counting as infinitely far.

@@ -6,6 +6,13 @@
 //   irradiance found over the share it covers; reprojected; 0 where there is none) and
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
 //   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
+//   It writes level 0 of the gather source: both layers' view depths and B in RGB9E5, 16 bytes
+//   a pixel, the only thing the taps read.
+// radiosity_source_level: the levels above, a rotated-grid MIP chain as the obscurance's depth
+//   pyramid (each texel one real pixel's depths and B). A tap h pixels away reads level
+//   floor(log2 h) - mip_offset (the slices never coarser than their step spacing) and its point
+//   is reconstructed at the pixel that texel came from: far taps read a small, cache-friendly
+//   level, and the work per tap is one 16-byte load.
 // radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
 //   world-space radius, Y from layer 0, or from layer 1 where the layer-0 point fails; a tap
 //   counts only with w.n_X > 0 and, unless the test is off, w.n_Y < 0 (Y faces X). With M the
@@ -43,6 +50,9 @@
 #include "shared/spiral.wgsl"
 #include "shared/vis.wgsl"
 #include "shared/slices.wgsl"
+#include "shared/mip.wgsl"
+#include "shared/level.wgsl"
+#include "shared/rgb9e5.wgsl"
 
 // Mirrors `RadiosityUniform` in src/frame/uniforms.rs.
 struct Radiosity {
@@ -66,8 +76,11 @@ struct Radiosity {
     thickness: f32,
     // 0: spiral, 1: slices (the kernel is chosen by define; the CPU reference reads this).
     estimator: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Levels of the gather source and their offsets in its buffer (up to 8).
+    levels: u32,
+    // A tap h pixels away reads level floor(log2 h) - mip_offset of the source.
+    mip_offset: u32,
+    offsets: array<vec4<u32>, 2>,
 }
 
 // boost(rho): the colour boost of reflected light (1 with the default settings).
@@ -87,8 +100,10 @@ fn boost(rho: vec3<f32>) -> f32 {
 @group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
 @group(0) @binding(4) var<storage, read> direct0: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> direct1: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> b0: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> b1: array<vec4<f32>>;
+// The gather source, one texel per pixel at level 0 and a rotated-grid MIP chain above it:
+// (view depth of layer 0, of layer 1, B of layer 0, of layer 1), depths as f32 bits, B in RGB9E5.
+@group(0) @binding(6) var<storage, read_write> source: array<vec4<u32>>;
+@group(0) @binding(7) var<uniform> level: PyramidLevel;
 @group(0) @binding(8) var<storage, read_write> raw: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> history_out: array<vec4<f32>>;
@@ -160,8 +175,23 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     if s1.depth > 0.0 {
         out1 = boost(s1.base_color) * direct1[p].rgb + s1.emissive;
     }
-    b0[p] = select(vec4<f32>(0.0), vec4<f32>(out0, 1.0), finite3(out0));
-    b1[p] = select(vec4<f32>(0.0), vec4<f32>(out1, 1.0), finite3(out1));
+    out0 = select(vec3<f32>(0.0), out0, finite3(out0));
+    out1 = select(vec3<f32>(0.0), out1, finite3(out1));
+    source[p] = vec4<u32>(bitcast<u32>(s0.depth), bitcast<u32>(s1.depth), pack_rgb9e5(out0), pack_rgb9e5(out1));
+}
+
+// Level `level` of the gather source from the level below (the rotated grid of
+// shared/level.wgsl: depths and radiance of one real pixel, never a blend across an edge).
+@compute @workgroup_size(8, 8)
+fn radiosity_source_level(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= level.dst_width || gid.y >= level.dst_height {
+        return;
+    }
+    source[level.dst_offset + gid.y * level.dst_width + gid.x] = source[rotated_grid_pick(level, gid.xy)];
+}
+
+fn source_offset(l: u32) -> u32 {
+    return params.offsets[l / 4u][l % 4u];
 }
 
 const PI_R: f32 = 3.14159265;
@@ -174,6 +204,7 @@ fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     let slices = max(params.slices, 1u);
     let steps = max(params.samples / (2u * slices), 1u);
     let spacing = r_px / f32(steps);
+    let coarsest = mip_coarsest(spacing, params.levels);
     let noise = slice_noise(pixel, params.turn);
     var seen = vec3<f32>(0.0);
     var covered = 0.0;
@@ -186,27 +217,35 @@ fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
         var sum = vec3<f32>(0.0);
         for (var j = 0u; j < steps; j++) {
             let h = spacing * (f32(j) + noise.y);
+            let step_level = mip_level(h, params.mip_offset, coarsest);
             for (var side = 0u; side < 2u; side++) {
                 let along = select(1.0, -1.0, side == 1u);
                 var tap: vec2<i32>;
                 if !slice_tap(pixel, sl, h, along, &tap) {
                     continue;
                 }
-                let q = u32(tap.y) * frame.width + u32(tap.x);
-                let at = vec2<f32>(tap) + 0.5;
-                let z0 = gword_depth(gbuffer0[q * G_WORDS]);
+                var q = 0u;
+                let at = mip_texel(tap, step_level, source_offset(step_level), &q);
+                let t = source[q];
+                let z0 = bitcast<f32>(t.x);
                 if !(z0 > 0.0) {
                     continue;
                 }
-                let z1 = gword_depth(gbuffer1[q * G_WORDS]);
+                let z1 = bitcast<f32>(t.y);
                 let backs = solid_backs(z0, z1, params.thickness);
                 var front2 = 0.0;
                 var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);
-                sum += b0[q].rgb * f32(countOneBits(bits & ~occupied));
+                var first = countOneBits(bits & ~occupied);
+                if first > 0u {
+                    sum += unpack_rgb9e5(t.z) * f32(first);
+                }
                 occupied |= bits;
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, 0.0, params.radius, &front2);
-                    sum += b1[q].rgb * f32(countOneBits(bits & ~occupied));
+                    first = countOneBits(bits & ~occupied);
+                    if first > 0u {
+                        sum += unpack_rgb9e5(t.w) * f32(first);
+                    }
                     occupied |= bits;
                 }
             }
@@ -230,33 +269,35 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }
-        let q = u32(tap.y) * frame.width + u32(tap.x);
-        let at = vec2<f32>(tap) + 0.5;
+        let tap_level = mip_level(spiral_distance(i, params.samples, r_px), params.mip_offset, params.levels - 1u);
+        var q = 0u;
+        let at = mip_texel(tap, tap_level, source_offset(tap_level), &q);
+        let t = source[q];
+        // The normals come from the G-buffer of the pixel the texel was taken from.
+        let o = u32(at.y) * frame.width + u32(at.x);
         for (var layer = 0u; layer < 2u; layer++) {
-            var y: GSample;
+            var depth: f32;
+            var normal: vec3<f32>;
             if layer == 0u {
-                y = sample0(q);
+                depth = bitcast<f32>(t.x);
+                normal = gword_normal(gbuffer0[o * G_WORDS]);
             } else {
-                y = sample1(q);
+                depth = bitcast<f32>(t.y);
+                normal = gword_normal(gbuffer1[o * G_WORDS]);
             }
-            if !(y.depth > 0.0) {
+            if !(depth > 0.0) {
                 continue;
             }
-            let v = view_position(frame, at, y.depth) - c;
+            let v = view_position(frame, at, depth) - c;
             let len = length(v);
             if !(len > 1e-6) {
                 continue;
             }
             let w = v / len;
             let wn_x = dot(w, n);
-            let wn_y = dot(w, normalize(mat_mul(frame.view, vec4<f32>(y.normal, 0.0)).xyz));
+            let wn_y = dot(w, normalize(mat_mul(frame.view, vec4<f32>(normal, 0.0)).xyz));
             if wn_x > 0.0 && (params.normal_test == 0u || wn_y < 0.0) {
-                var radiance: vec3<f32>;
-                if layer == 0u {
-                    radiance = b0[q].rgb;
-                } else {
-                    radiance = b1[q].rgb;
-                }
+                let radiance = unpack_rgb9e5(select(t.w, t.z, layer == 0u));
                 sum += radiance * wn_x;
                 weight += wn_x;
                 m += 1u;

@@ -4,25 +4,13 @@ use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::mat_mul;
 pub use crate::cpu::frame::view_position;
+use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_texel};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
 use crate::frame::FrameUniform;
 use crate::frame::PyramidLayout;
 use crate::gbuffer::GSample;
 use crate::settings::{AoEstimator, AoSettings};
-
-/// As `texel_origin` in the WGSL: the level-0 pixel a pyramid texel was taken from.
-fn texel_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {
-    let mut p = t;
-    for l in (1..=level).rev() {
-        let below = layout.levels[l - 1];
-        p = (
-            (2 * p.0 + ((p.1 & 1) ^ 1)).min(below.width - 1),
-            (2 * p.1 + ((p.0 & 1) ^ 1)).min(below.height - 1),
-        );
-    }
-    p
-}
 
 fn obscurance(s: &AoSettings, c: Vec3, n: Vec3, y: Vec3) -> f32 {
     let v = y - c;
@@ -80,18 +68,13 @@ impl Kernel<'_> {
 
     /// As `pyramid_texel`: the index of the texel of `level` under pixel `(tx, ty)` and the
     /// centre of the pixel it came from.
-    fn pyramid_texel(&self, (tx, ty): (u32, u32), level: usize) -> (usize, Vec2) {
-        let l = self.layout.levels[level];
-        let texel = (tx >> level, ty >> level);
-        let origin = texel_origin(self.layout, level, texel);
-        let q = (l.offset + texel.1 * l.width + texel.0) as usize;
-        (q, Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5)
+    fn pyramid_texel(&self, tap: (u32, u32), level: usize) -> (usize, Vec2) {
+        mip_texel(self.layout, tap, level)
     }
 
     /// As `tap_level`: the pyramid level a tap `h` pixels away reads.
     fn tap_level(&self, h: f32, coarsest: usize) -> usize {
-        ((h.max(1.0).log2().floor() as i32) - self.s.mip_offset as i32).clamp(0, coarsest as i32)
-            as usize
+        mip_level(h, self.s.mip_offset, coarsest)
     }
 
     /// As `visibility`: Scalable Ambient Obscurance's sum.
@@ -126,8 +109,7 @@ impl Kernel<'_> {
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
         let spacing = r_px / steps as f32;
-        let levels = self.layout.levels.len().min(8) as i32;
-        let level = (spacing.max(1.0).log2().floor() as i32).clamp(0, levels - 1) as usize;
+        let level = mip_coarsest(spacing, self.layout);
         let noise = slice_noise(x, y, 0);
         let thickness = s.solid_depth();
         let r2 = s.radius * s.radius;

@@ -1,12 +1,20 @@
 //! CPU reference of `wgsl/pyramid.wgsl`: the rotated-grid and the nearest-depth MIP chains.
 
+use glam::Vec2;
+
 use crate::frame::PyramidLayout;
 
 /// All levels of the pyramid of `depth` (`layout.levels[0]` is `depth` itself), packed at the
 /// layout's offsets.
 pub fn pyramid(depth: &[f32], layout: &PyramidLayout) -> Vec<f32> {
-    let mut out = vec![0.0; layout.total as usize];
-    out[..depth.len()].copy_from_slice(depth);
+    rotated_grid(depth, layout)
+}
+
+/// The rotated-grid MIP chain of `base` (`wgsl/shared/level.wgsl`; `layout.levels[0]` is
+/// `base` itself), packed at the layout's offsets: each texel one texel of the level below.
+pub fn rotated_grid<T: Copy + Default>(base: &[T], layout: &PyramidLayout) -> Vec<T> {
+    let mut out = vec![T::default(); layout.total as usize];
+    out[..base.len()].copy_from_slice(base);
     for pair in layout.levels.windows(2) {
         let (src, dst) = (&pair[0], &pair[1]);
         for y in 0..dst.height {
@@ -19,6 +27,41 @@ pub fn pyramid(depth: &[f32], layout: &PyramidLayout) -> Vec<f32> {
         }
     }
     out
+}
+
+/// As `mip_origin` (`wgsl/shared/mip.wgsl`): the level-0 pixel texel `t` of `level` was taken
+/// from.
+fn mip_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {
+    let mut p = t;
+    for l in (1..=level).rev() {
+        let below = layout.levels[l - 1];
+        p = (
+            (2 * p.0 + ((p.1 & 1) ^ 1)).min(below.width - 1),
+            (2 * p.1 + ((p.0 & 1) ^ 1)).min(below.height - 1),
+        );
+    }
+    p
+}
+
+/// As `mip_texel`: the index of the texel of `level` under pixel `(tx, ty)` and the centre of
+/// the pixel it came from.
+pub fn mip_texel(layout: &PyramidLayout, (tx, ty): (u32, u32), level: usize) -> (usize, Vec2) {
+    let l = layout.levels[level];
+    let texel = (tx >> level, ty >> level);
+    let origin = mip_origin(layout, level, texel);
+    let q = (l.offset + texel.1 * l.width + texel.0) as usize;
+    (q, Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5)
+}
+
+/// As `mip_level`: the level a tap `h` pixels away reads, within [0, coarsest].
+pub fn mip_level(h: f32, mip_offset: u32, coarsest: usize) -> usize {
+    ((h.max(1.0).log2().floor() as i32) - mip_offset as i32).clamp(0, coarsest as i32) as usize
+}
+
+/// As `mip_coarsest`: the coarsest level a march of steps `spacing` pixels apart reads.
+pub fn mip_coarsest(spacing: f32, layout: &PyramidLayout) -> usize {
+    let levels = layout.levels.len().min(8) as i32;
+    (spacing.max(1.0).log2().floor() as i32).clamp(0, levels - 1) as usize
 }
 
 /// The nearer of two depths, 0 (no surface) counting as infinitely far.

@@ -6,10 +6,10 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_texel, rotated_grid};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
-use crate::cpu::spiral::{pixels_per_unit, spiral_tap_turned};
-use crate::frame::FrameUniform;
-use crate::frame::RadiosityUniform;
+use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap_turned};
+use crate::frame::{FrameUniform, PyramidLayout, RadiosityUniform, SourceTexel};
 use crate::gbuffer::GSample;
 use crate::settings::Boost;
 
@@ -36,14 +36,30 @@ pub fn feedback_without_history(
         .collect()
 }
 
+/// The gather source of `radiosity_feedback` and `radiosity_source_level`: both layers' view
+/// depths and B (`b`) at every pixel, and the rotated-grid levels of `layout` above them.
+pub fn source(
+    layers: [&[GSample]; 2],
+    b: [&[Vec3]; 2],
+    layout: &PyramidLayout,
+) -> Vec<SourceTexel> {
+    let base: Vec<SourceTexel> = (0..layers[0].len())
+        .map(|p| SourceTexel::new([layers[0][p].depth, layers[1][p].depth], [b[0][p], b[1][p]]))
+        .collect();
+    rotated_grid(&base, layout)
+}
+
 /// The gathered irradiance (rgb) and confidence (w) of every layer-0 pixel, by the estimator
-/// `u.estimator` names.
+/// `u.estimator` names, from the gather `source` (levels of `layout`); `layers` give the centre
+/// points and the spiral's normals.
 pub fn gather(
     f: &FrameUniform,
     u: &RadiosityUniform,
     layers: [&[GSample]; 2],
-    b: [&[Vec3]; 2],
+    source: &[SourceTexel],
+    layout: &PyramidLayout,
 ) -> Vec<Vec4> {
+    let g = Gather { f, u, layers, source, layout };
     let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
@@ -53,7 +69,7 @@ pub fn gather(
                 continue;
             }
             if u.estimator == 1 {
-                out[p] = slices_gather(f, u, layers, b, (x, y));
+                out[p] = g.slices((x, y));
                 continue;
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
@@ -67,24 +83,28 @@ pub fn gather(
                 if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
                     continue;
                 }
-                let q = (ty as u32 * f.width + tx as u32) as usize;
-                let at = Vec2::new(tx as f32, ty as f32) + 0.5;
-                for layer in 0..2 {
-                    let yl = &layers[layer][q];
-                    if yl.depth.is_nan() || yl.depth <= 0.0 {
+                let h = spiral_distance(i, u.samples, r_px);
+                let level = mip_level(h, u.mip_offset, u.levels as usize - 1);
+                let (q, at) = mip_texel(layout, (tx as u32, ty as u32), level);
+                let t = &source[q];
+                let o = (at.y as u32 * f.width + at.x as u32) as usize;
+                for (layer, samples) in layers.iter().enumerate() {
+                    let depth = t.depth(layer);
+                    if depth.is_nan() || depth <= 0.0 {
                         continue;
                     }
-                    let v = view_position(f, at, yl.depth) - c;
+                    let v = view_position(f, at, depth) - c;
                     let len = v.length();
                     if len.is_nan() || len <= 1e-6 {
                         continue;
                     }
                     let w = v / len;
                     let wn_x = w.dot(n);
+                    let normal = samples[o].normal;
                     let wn_y =
-                        w.dot(mat_mul(&f.view, yl.normal.extend(0.0).to_array()).xyz().normalize());
+                        w.dot(mat_mul(&f.view, normal.extend(0.0).to_array()).xyz().normalize());
                     if wn_x > 0.0 && (u.normal_test == 0 || wn_y < 0.0) {
-                        sum += b[layer][q] * wn_x;
+                        sum += t.radiance(layer) * wn_x;
                         weight += wn_x;
                         m += 1;
                         break;
@@ -103,55 +123,64 @@ pub fn gather(
     out
 }
 
-/// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
-fn slices_gather(
-    f: &FrameUniform,
-    u: &RadiosityUniform,
-    layers: [&[GSample]; 2],
-    b: [&[Vec3]; 2],
-    (x, y): (u32, u32),
-) -> Vec4 {
-    let s = &layers[0][(y * f.width + x) as usize];
-    let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
-    let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
-    let r_px = u.radius * pixels_per_unit(f, s.depth);
-    let slices = u.slices.max(1);
-    let steps = (u.samples / (2 * slices)).max(1);
-    let spacing = r_px / steps as f32;
-    let noise = slice_noise(x, y, u.turn);
-    let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
-    for k in 0..slices {
-        let sl = Slice::at(f, k, slices, noise, c, n);
-        if sl.weight.is_nan() || sl.weight <= 0.0 {
-            continue;
-        }
-        let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
-        for j in 0..steps {
-            let h = spacing * (j as f32 + noise.1);
-            for side in [1.0, -1.0] {
-                let Some((tx, ty)) = sl.tap(f, (x, y), h, side) else {
-                    continue;
-                };
-                let q = (ty * f.width + tx) as usize;
-                let at = Vec2::new(tx as f32, ty as f32) + 0.5;
-                let z0 = layers[0][q].depth;
-                if z0.is_nan() || z0 <= 0.0 {
-                    continue;
-                }
-                let z1 = layers[1][q].depth;
-                let (back0, back1) = solid_backs(z0, z1, u.thickness);
-                let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
-                sum += b[0][q] * (bits & !occupied).count_ones() as f32;
-                occupied |= bits;
-                if z1 > z0 {
-                    let (bits, _) = sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
-                    sum += b[1][q] * (bits & !occupied).count_ones() as f32;
+/// What the gather reads.
+struct Gather<'a> {
+    f: &'a FrameUniform,
+    u: &'a RadiosityUniform,
+    layers: [&'a [GSample]; 2],
+    source: &'a [SourceTexel],
+    layout: &'a PyramidLayout,
+}
+
+impl Gather<'_> {
+    /// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
+    fn slices(&self, (x, y): (u32, u32)) -> Vec4 {
+        let (f, u) = (self.f, self.u);
+        let s = &self.layers[0][(y * f.width + x) as usize];
+        let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+        let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
+        let r_px = u.radius * pixels_per_unit(f, s.depth);
+        let slices = u.slices.max(1);
+        let steps = (u.samples / (2 * slices)).max(1);
+        let spacing = r_px / steps as f32;
+        let coarsest = mip_coarsest(spacing, self.layout);
+        let noise = slice_noise(x, y, u.turn);
+        let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
+        for k in 0..slices {
+            let sl = Slice::at(f, k, slices, noise, c, n);
+            if sl.weight.is_nan() || sl.weight <= 0.0 {
+                continue;
+            }
+            let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
+            for j in 0..steps {
+                let h = spacing * (j as f32 + noise.1);
+                let level = mip_level(h, u.mip_offset, coarsest);
+                for side in [1.0, -1.0] {
+                    let Some(tap) = sl.tap(f, (x, y), h, side) else {
+                        continue;
+                    };
+                    let (q, at) = mip_texel(self.layout, tap, level);
+                    let t = &self.source[q];
+                    let z0 = t.depth(0);
+                    if z0.is_nan() || z0 <= 0.0 {
+                        continue;
+                    }
+                    let z1 = t.depth(1);
+                    let (back0, back1) = solid_backs(z0, z1, u.thickness);
+                    let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
+                    sum += t.radiance(0) * (bits & !occupied).count_ones() as f32;
                     occupied |= bits;
+                    if z1 > z0 {
+                        let (bits, _) =
+                            sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
+                        sum += t.radiance(1) * (bits & !occupied).count_ones() as f32;
+                        occupied |= bits;
+                    }
                 }
             }
+            seen += sl.weight * sum / SECTORS as f32;
+            covered += sl.weight * occupied.count_ones() as f32 / SECTORS as f32;
         }
-        seen += sl.weight * sum / SECTORS as f32;
-        covered += sl.weight * occupied.count_ones() as f32 / SECTORS as f32;
+        (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
     }
-    (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
 }

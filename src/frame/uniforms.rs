@@ -44,10 +44,6 @@ mirrored!(
 impl AoUniform {
     /// The constants for `settings` over a pyramid of `layout`.
     pub fn new(settings: &AoSettings, layout: &PyramidLayout) -> Self {
-        let mut offsets = [[0; 4]; 2];
-        for (i, l) in layout.levels.iter().enumerate().take(8) {
-            offsets[i / 4][i % 4] = l.offset;
-        }
         AoUniform {
             radius: settings.radius,
             bias: settings.bias,
@@ -57,9 +53,18 @@ impl AoUniform {
             mip_offset: settings.mip_offset,
             slices: settings.slices,
             thickness: settings.solid_depth(),
-            offsets,
+            offsets: level_offsets(layout),
         }
     }
+}
+
+/// The first texel of each of `layout`'s levels (up to 8), as the kernels' `offsets` hold them.
+fn level_offsets(layout: &PyramidLayout) -> [[u32; 4]; 2] {
+    let mut offsets = [[0; 4]; 2];
+    for (i, l) in layout.levels.iter().enumerate().take(8) {
+        offsets[i / 4][i % 4] = l.offset;
+    }
+    offsets
 }
 
 /// Mirrors `struct Radiosity` in `wgsl/radiosity.wgsl`.
@@ -95,8 +100,12 @@ pub struct RadiosityUniform {
     /// 0: [`RadiosityEstimator::Spiral`], 1: [`RadiosityEstimator::Slices`] (the kernel is
     /// chosen by define; the CPU reference reads this).
     pub estimator: u32,
-    /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    /// Levels of the gather source.
+    pub levels: u32,
+    /// [`RadiositySettings::mip_offset`].
+    pub mip_offset: u32,
+    /// Level offsets in the gather source (up to 8).
+    pub offsets: [[u32; 4]; 2],
 }
 
 mirrored!(
@@ -117,14 +126,17 @@ mirrored!(
         boost_saturated,
         slices,
         thickness,
-        estimator
+        estimator,
+        levels,
+        mip_offset,
+        offsets
     ]
 );
 
 impl RadiosityUniform {
-    /// The constants for `s`; `history` tells whether the previous frame may be used, `turn` the
-    /// frame count since the history began.
-    pub fn new(s: &RadiositySettings, history: bool, turn: u32) -> Self {
+    /// The constants for `s` over a gather source of `layout`; `history` tells whether the
+    /// previous frame may be used, `turn` the frame count since the history began.
+    pub fn new(s: &RadiositySettings, layout: &PyramidLayout, history: bool, turn: u32) -> Self {
         RadiosityUniform {
             radius: s.radius,
             samples: s.samples,
@@ -146,7 +158,9 @@ impl RadiosityUniform {
                 RadiosityEstimator::Spiral => 0,
                 RadiosityEstimator::Slices => 1,
             },
-            _pad: [0; 2],
+            levels: layout.levels.len().min(8) as u32,
+            mip_offset: s.mip_offset,
+            offsets: level_offsets(layout),
         }
     }
 }

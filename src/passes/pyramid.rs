@@ -37,6 +37,11 @@ impl Pyramid {
         &self.layout
     }
 
+    /// The constants (`PyramidLevel`) that build level `i`.
+    pub(crate) fn level(&self, i: usize) -> &wgpu::Buffer {
+        &self.levels[i]
+    }
+
     /// Records the `kind` pyramid of `gbuffer` into `target`.
     pub(crate) fn record(
         &self,
@@ -55,7 +60,7 @@ impl Pyramid {
             let entry = if i == 0 { "pyramid_base" } else { above };
             let pipeline = ctx.pipelines.get(ctx.device, "pyramid", entry, &defines, &[]);
             let entries =
-                [(slot::LEVEL, &self.levels[i]), (slot::GBUFFER, gbuffer), (slot::PYRAMID, target)];
+                [(slot::LEVEL, self.level(i)), (slot::GBUFFER, gbuffer), (slot::PYRAMID, target)];
             pipeline.dispatch_pixels(ctx.device, pass, &entries, (level.width, level.height));
         }
     }

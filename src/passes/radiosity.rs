@@ -1,18 +1,22 @@
 //! `wgsl/radiosity.wgsl`: screen-space radiosity with temporal multi-bounce.
 
 use super::blur::Blur;
+use super::pyramid::Pyramid;
 use super::{FrameContext, Recorder, Stage};
 use crate::frame::RadiosityUniform;
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
 use crate::settings::{RadiosityEstimator, Settings};
 
-/// The radiosity's buffers, all `vec4<f32>` per pixel, as
-/// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them.
+/// The radiosity's buffers, as
+/// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them: the gather
+/// source, then `vec4<f32>` per pixel.
 #[derive(Clone, Copy, Debug)]
 pub struct RadiosityBuffers<'a> {
-    /// Outgoing radiance B of layer 0 and layer 1 (direct + emission + damped indirect light).
-    pub outgoing: [&'a wgpu::Buffer; 2],
+    /// The gather source: a [`SourceTexel`](crate::frame::SourceTexel) per pixel (view depths
+    /// and outgoing radiance B of both layers: direct + emission + damped indirect light), then
+    /// its MIP levels (as [`PyramidLayout`](crate::frame::PyramidLayout) places them).
+    pub source: &'a wgpu::Buffer,
     /// The gather's irradiance (rgb) and confidence (a).
     pub gathered: &'a wgpu::Buffer,
     /// The temporally filtered irradiance and confidence.
@@ -22,23 +26,19 @@ pub struct RadiosityBuffers<'a> {
 }
 
 impl<'a> RadiosityBuffers<'a> {
-    /// Every buffer with its name: `b0`, `b1`, `gathered`, `filtered`, `irradiance`.
-    pub fn named(&self) -> [(&'static str, &'a wgpu::Buffer); 5] {
-        [
-            ("b0", self.outgoing[0]),
-            ("b1", self.outgoing[1]),
-            ("gathered", self.gathered),
-            ("filtered", self.filtered),
-            ("irradiance", self.irradiance),
-        ]
+    /// The `vec4<f32>` buffers with their names: `gathered`, `filtered`, `irradiance`.
+    pub fn named(&self) -> [(&'static str, &'a wgpu::Buffer); 3] {
+        [("gathered", self.gathered), ("filtered", self.filtered), ("irradiance", self.irradiance)]
     }
 }
 
-/// The radiosity: its constants, B of both layers, the gathered irradiance, the filtered
-/// irradiance of the last and this frame (ping-pong), and the blur's intermediate and result.
+/// The radiosity: its constants, the gather source and its levels' constants, the gathered
+/// irradiance, the filtered irradiance of the last and this frame (ping-pong), and the blur's
+/// intermediate and result.
 pub(crate) struct RadiosityStage {
     uniform: wgpu::Buffer,
-    outgoing: [wgpu::Buffer; 2],
+    source: wgpu::Buffer,
+    levels: Pyramid,
     gathered: wgpu::Buffer,
     history: [wgpu::Buffer; 2],
     /// Which `history` this (or, between frames, the last) frame filters into.
@@ -53,11 +53,15 @@ impl RadiosityStage {
     /// Targets for `s`'s image size.
     pub(crate) fn new(device: &wgpu::Device, s: &Settings) -> Self {
         let pixels = u64::from(s.width) * u64::from(s.height);
-        let buffer =
-            |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
+        let storage =
+            |label, bytes| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+        let buffer = |label| storage(label, pixels * 16);
+        let levels = Pyramid::new(device, s.width, s.height);
+        let texels = u64::from(levels.layout().total);
         RadiosityStage {
             uniform: gpu::uniform_buffer_for::<RadiosityUniform>(device, "deep-gbuffer.radiosity"),
-            outgoing: [buffer("deep-gbuffer.radiosity.b0"), buffer("deep-gbuffer.radiosity.b1")],
+            source: storage("deep-gbuffer.radiosity.source", texels * 16),
+            levels,
             gathered: buffer("deep-gbuffer.radiosity.raw"),
             history: [
                 buffer("deep-gbuffer.radiosity.history.a"),
@@ -75,7 +79,7 @@ impl RadiosityStage {
     pub(crate) fn prepare(&mut self, queue: &wgpu::Queue, s: &Settings, history: bool) {
         self.current = 1 - self.current;
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
-        let uniform = RadiosityUniform::new(&s.radiosity, history, self.turn);
+        let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 
@@ -83,7 +87,7 @@ impl RadiosityStage {
     pub(crate) fn buffers(&self, s: &Settings) -> RadiosityBuffers<'_> {
         let filtered = &self.history[self.current];
         RadiosityBuffers {
-            outgoing: [&self.outgoing[0], &self.outgoing[1]],
+            source: &self.source,
             gathered: &self.gathered,
             filtered,
             irradiance: if s.radiosity.blur_radius > 0 { &self.blurred } else { filtered },
@@ -103,8 +107,7 @@ impl Stage for RadiosityStage {
             (slot::GBUFFER1, ctx.gbuffer[1]),
             (slot::DIRECT0, ctx.direct[0]),
             (slot::DIRECT1, ctx.direct[1]),
-            (slot::B0, &self.outgoing[0]),
-            (slot::B1, &self.outgoing[1]),
+            (slot::SOURCE, &self.source),
             (slot::RAW, &self.gathered),
             (slot::HISTORY_IN, history_in),
             (slot::HISTORY_OUT, history_out),
@@ -121,6 +124,18 @@ impl Stage for RadiosityStage {
         match id {
             PassId::Radiosity => {
                 run(&mut pass, "radiosity_feedback");
+                let pipeline =
+                    ctx.pipelines.get(ctx.device, "radiosity", "radiosity_source_level", &[], &[]);
+                for (i, level) in self.levels.layout().levels.iter().enumerate().skip(1) {
+                    let entries =
+                        [(slot::SOURCE, &self.source), (slot::LEVEL, self.levels.level(i))];
+                    pipeline.dispatch_pixels(
+                        ctx.device,
+                        &mut pass,
+                        &entries,
+                        (level.width, level.height),
+                    );
+                }
                 run(&mut pass, "radiosity_gather");
             }
             PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal"),
