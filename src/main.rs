@@ -121,6 +121,12 @@ struct SweepArgs {
     /// offset).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_mip_offset))]
     radiosity_mip_offset: Vec<u32>,
+    /// Obscurance resolution divisors to sweep (1, 2, 4).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_downsample))]
+    ao_downsample: Vec<u32>,
+    /// Radiosity resolution divisors to sweep (1, 2, 4).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_downsample))]
+    radiosity_downsample: Vec<u32>,
     /// Layer separations Δz to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
@@ -226,6 +232,10 @@ struct AoArgs {
     /// Obscurance from layer 0 only (to compare with the two-layer estimator).
     #[arg(long)]
     ao_one_layer: bool,
+    /// Compute the obscurance at 1/N of the image's width and height (1, 2 or 4), upsampled by
+    /// depth and normal [default: 1].
+    #[arg(long)]
+    ao_downsample: Option<u32>,
 }
 
 impl AoArgs {
@@ -236,6 +246,7 @@ impl AoArgs {
         ao.samples = self.ao_samples.unwrap_or(ao.samples);
         ao.slices = self.ao_slices.unwrap_or(ao.slices);
         ao.thickness = self.ao_thickness.unwrap_or(ao.thickness);
+        ao.downsample = self.ao_downsample.unwrap_or(ao.downsample);
         if self.ao_one_layer {
             ao.two_layers = false;
         }
@@ -262,6 +273,10 @@ struct RadiosityArgs {
     /// 0 to 8 [default: 4].
     #[arg(long)]
     radiosity_mip_offset: Option<u32>,
+    /// Gather the radiosity at 1/N of the image's width and height (1, 2 or 4), upsampled by
+    /// depth and normal [default: 1].
+    #[arg(long)]
+    radiosity_downsample: Option<u32>,
 }
 
 impl RadiosityArgs {
@@ -272,6 +287,7 @@ impl RadiosityArgs {
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
+        r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
     }
 }
 
@@ -681,6 +697,8 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_radius: args.radiosity_radius,
         mip_offset: args.mip_offset,
         radiosity_mip_offset: args.radiosity_mip_offset,
+        ao_downsample: args.ao_downsample,
+        radiosity_downsample: args.radiosity_downsample,
         dz: args.dz,
         layer1: args.layer1,
         scale: args.scale,

@@ -894,6 +894,13 @@ impl Renderer {
         self.stages.ao.as_ref().map(AoStage::raw)
     }
 
+    /// The obscurance as computed at 1 / [`AoSettings::downsample`](crate::AoSettings) of the
+    /// image's width and height (f32 per texel of that level of the rotated grid, before the
+    /// upsample), or `None` when obscurance has not run or runs at full resolution.
+    pub fn ao_low_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.stages.ao.as_ref().and_then(AoStage::low)
+    }
+
     /// The depth pyramid of `layer` (levels packed as in
     /// [`PyramidLayout`](crate::frame::PyramidLayout)), or `None` when obscurance has not run.
     pub fn pyramid_buffer(&self, layer: usize) -> Option<&wgpu::Buffer> {

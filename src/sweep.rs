@@ -57,6 +57,10 @@ pub struct Knobs {
     pub mip_offset: u32,
     /// Radiosity gather source level offset ([`RadiositySettings::mip_offset`]).
     pub radiosity_mip_offset: u32,
+    /// Obscurance resolution divisor ([`AoSettings::downsample`]).
+    pub ao_downsample: u32,
+    /// Radiosity resolution divisor ([`RadiositySettings::downsample`]).
+    pub radiosity_downsample: u32,
     /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
     pub dz: f32,
     /// How layer 1 is rasterized.
@@ -81,12 +85,14 @@ impl Knobs {
                 samples: self.ao_samples,
                 two_layers: self.layers == 2,
                 mip_offset: self.mip_offset,
+                downsample: self.ao_downsample,
                 ..AoSettings::default()
             },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
+                downsample: self.radiosity_downsample,
                 ..RadiositySettings::default()
             },
             timings: true,
@@ -134,6 +140,10 @@ pub struct Grid {
     pub mip_offset: Vec<u32>,
     /// Radiosity gather source level offsets.
     pub radiosity_mip_offset: Vec<u32>,
+    /// Obscurance resolution divisors.
+    pub ao_downsample: Vec<u32>,
+    /// Radiosity resolution divisors.
+    pub radiosity_downsample: Vec<u32>,
     /// Layer separations.
     pub dz: Vec<f32>,
     /// Layer-1 variants.
@@ -155,6 +165,8 @@ impl Default for Grid {
             radiosity_radius: vec![settings.radiosity.radius],
             mip_offset: vec![settings.ao.mip_offset],
             radiosity_mip_offset: vec![settings.radiosity.mip_offset],
+            ao_downsample: vec![settings.ao.downsample],
+            radiosity_downsample: vec![settings.radiosity.downsample],
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
@@ -189,6 +201,8 @@ impl Grid {
             radiosity_radius: settings.radiosity.radius,
             mip_offset: settings.ao.mip_offset,
             radiosity_mip_offset: settings.radiosity.mip_offset,
+            ao_downsample: settings.ao.downsample,
+            radiosity_downsample: settings.radiosity.downsample,
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
@@ -199,6 +213,8 @@ impl Grid {
         let k = times(k, &self.dz, |k, v| k.dz = v);
         let k = times(k, &self.mip_offset, |k, v| k.mip_offset = v);
         let k = times(k, &self.radiosity_mip_offset, |k, v| k.radiosity_mip_offset = v);
+        let k = times(k, &self.ao_downsample, |k, v| k.ao_downsample = v);
+        let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -474,7 +490,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -495,7 +511,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -505,6 +521,8 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_radius,
             k.mip_offset,
             k.radiosity_mip_offset,
+            k.ao_downsample,
+            k.radiosity_downsample,
             k.dz,
             k.layer1,
             k.scale
@@ -554,13 +572,15 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 9] = [
+    let optional: [Column; 11] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
+        ("AO downsample", |k| k.ao_downsample.to_string()),
+        ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
         ("Δz", |k| k.dz.to_string()),
         ("layer 1", |k| format!("{:?}", k.layer1)),
         ("scale", |k| k.scale.to_string()),

@@ -5,8 +5,11 @@ mod common;
 use common::{
     GBUFFER_FIXTURES, assert_few_differ, corner, corner_surface, gpu, render, shade_fixture, soup,
 };
-use deep_gbuffer::cpu::{ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid};
+use deep_gbuffer::cpu::{
+    ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid, upsample as cpu_upsample,
+};
 use deep_gbuffer::frame::PyramidLayout;
+use deep_gbuffer::settings::downsample_level;
 use deep_gbuffer::{AoEstimator, AoSettings, Camera, Scene, Settings};
 use glam::Vec3;
 
@@ -40,9 +43,31 @@ fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
     let expected = cpu_ao::ao(&r.frame, &ao, &layers[0].samples, &layout, &pyramids[0], p1);
     let raw =
         r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_raw_buffer().unwrap()).unwrap();
+    // At a lower resolution, the texels computed against the CPU's, then the upsample of the
+    // GPU's own texels against the CPU's.
+    let level = downsample_level(ao.downsample) as usize;
+    let computed = match r.renderer.ao_low_buffer() {
+        Some(low) => r.renderer.read_f32(&g.device, &g.queue, low).unwrap(),
+        None => raw.clone(),
+    };
+    assert_eq!(level > 0, r.renderer.ao_low_buffer().is_some());
     let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
-    assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, "AV against the CPU reference");
+    let computed = &computed[..expected.len()];
+    assert_few_differ(
+        computed,
+        &expected,
+        AO_FLIPPED_FRACTION,
+        far,
+        "AV against the CPU reference",
+    );
     assert!(raw.iter().all(|v| (0.0..=1.0).contains(v)), "AV in [0, 1]");
+    if level > 0 {
+        let up = cpu_upsample::upsample(w, h, level, 1.0, &layers[0].samples, computed);
+        for (p, (a, b)) in raw.iter().zip(&up).enumerate() {
+            // Weighted sums of the same four values: f32 rounding only.
+            assert!((a - b).abs() <= 1e-5, "upsample at pixel {p}: gpu {a} cpu {b}");
+        }
+    }
 
     // The blur, from the GPU's own raw AV, against the CPU blur.
     let horizontal =
@@ -54,6 +79,29 @@ fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
         assert!((a - b).abs() <= 1e-4, "blur at pixel {p}: gpu {a} cpu {b}");
     }
     actual[..(w * h) as usize].to_vec()
+}
+
+/// At half and quarter resolution each computed texel is the full-resolution estimate at the
+/// pixel it stands for, and the upsample fills in the rest as the CPU's does.
+#[test]
+fn lower_resolutions_match_cpu_reference() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    for estimator in [AoEstimator::Sao, AoEstimator::Bitmask] {
+        for downsample in [2, 4] {
+            let ao = AoSettings {
+                estimator,
+                downsample,
+                radius: 0.4,
+                samples: 12,
+                ..Default::default()
+            };
+            // Creases cover fewer texels at a lower resolution: the mean rises a little.
+            let av = compare_with_cpu(&scene, &camera, settings(80, 60, ao));
+            let mean = av.iter().sum::<f32>() / av.len() as f32;
+            assert!(mean < 0.99 && mean > 0.3, "{estimator:?} at 1/{downsample}: {mean}");
+        }
+    }
 }
 
 #[test]
@@ -135,6 +183,8 @@ fn invalid_obscurance_settings_are_refused() {
         (AoSettings { radius: -1.0, ..Default::default() }, "ao.radius"),
         (AoSettings { samples: 0, ..Default::default() }, "ao.samples"),
         (AoSettings { intensity: f32::NAN, ..Default::default() }, "ao.intensity"),
+        (AoSettings { downsample: 3, ..Default::default() }, "ao.downsample"),
+        (AoSettings { downsample: 0, ..Default::default() }, "ao.downsample"),
     ] {
         match deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(8, 8, ao)) {
             Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),

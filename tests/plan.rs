@@ -163,7 +163,8 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
     use deep_gbuffer::Preset;
     let mut low = Settings::default();
     Preset::Low.apply(&mut low);
-    assert_eq!((low.ao.samples, low.ao.slices, low.radiosity.samples, low.layers), (16, 2, 16, 1));
+    assert_eq!((low.ao.samples, low.ao.slices, low.radiosity.samples, low.layers), (32, 2, 32, 1));
+    assert_eq!((low.ao.downsample, low.radiosity.downsample), (2, 2));
     assert_eq!(low.ao.estimator, deep_gbuffer::AoEstimator::Bitmask);
     assert_eq!(low.precision, deep_gbuffer::Precision::Full);
     let mut ultra = Settings::default();

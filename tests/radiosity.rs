@@ -7,6 +7,7 @@ mod common;
 use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render_frames, shade_fixture};
 use deep_gbuffer::cpu::radiosity as cpu;
 use deep_gbuffer::frame::{PyramidLayout, RadiosityUniform, SourceTexel};
+use deep_gbuffer::settings::downsample_level;
 use deep_gbuffer::{
     Boost, Normalization, RadiosityEstimator, RadiositySettings, Renderer, Scene, SceneBuffers,
     Settings,
@@ -37,6 +38,21 @@ fn first_frame_matches_cpu_reference() {
             mip_offset: 0,
             ..Default::default()
         });
+    }
+}
+
+/// At half and quarter resolution each gathered texel is the full-resolution gather at the pixel
+/// it stands for, and the upsample fills in the rest as the CPU's does.
+#[test]
+fn lower_resolutions_match_cpu_reference() {
+    for estimator in [RadiosityEstimator::Slices, RadiosityEstimator::Spiral] {
+        for downsample in [2, 4] {
+            first_frame_against_cpu(RadiositySettings {
+                estimator,
+                downsample,
+                ..Default::default()
+            });
+        }
     }
 }
 
@@ -105,7 +121,7 @@ fn first_frame_matches(
     what: &str,
 ) -> Vec<Vec4> {
     let g = gpu();
-    let deep_gbuffer::RadiosityBuffers { source, gathered: raw, .. } =
+    let deep_gbuffer::RadiosityBuffers { source, low, gathered: raw, .. } =
         renderer.radiosity_buffers().expect("radiosity runs");
     let source: Vec<SourceTexel> = bytemuck::pod_collect_to_vec(
         &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, source).unwrap(),
@@ -134,12 +150,31 @@ fn first_frame_matches(
     // The levels above pick texels of the GPU's own level 0, exactly.
     let levels = deep_gbuffer::cpu::pyramid::rotated_grid(&source[..pixels], &layout);
     assert!(levels == source, "{what}: the gather source's levels against the CPU's");
-    let expected = cpu::gather(frame, &uniform, layers, &source, &layout);
+    // At a lower resolution the texels the gather computed against the CPU's, then the upsample
+    // of the GPU's own texels against the CPU's.
+    let level = downsample_level(radiosity.downsample) as usize;
+    let expected = cpu::gather(frame, &uniform, layers, &source, &layout, level);
+    let computed = match low {
+        Some(low) => read4(renderer, low),
+        None => raw.clone(),
+    };
+    assert_eq!(level > 0, low.is_some());
+    let computed = &computed[..expected.len()];
     let far = |a: &Vec4, e: &Vec4| {
         (*a - *e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
     };
-    let what = format!("{what}: the gather against the CPU's");
-    assert_few_differ(&raw, &expected, RADIOSITY_FLIPPED_FRACTION, far, &what);
+    let gather = format!("{what}: the gather against the CPU's");
+    assert_few_differ(computed, &expected, RADIOSITY_FLIPPED_FRACTION, far, &gather);
+    if level > 0 {
+        let (w, h) = (frame.width, frame.height);
+        let up =
+            deep_gbuffer::cpu::upsample::upsample(w, h, level, Vec4::ZERO, layers[0], computed);
+        for (p, (a, e)) in raw.iter().zip(&up).enumerate() {
+            // Weighted sums of the same four values: f32 rounding only.
+            let close = (*a - *e).abs().max_element() <= 1e-5 * e.max_element().max(1.0);
+            assert!(close, "{what}: upsample at pixel {p}: gpu {a} cpu {e}");
+        }
+    }
     assert!(raw.iter().all(|e| e.is_finite() && e.min_element() >= 0.0 && e.w <= 1.0));
     raw
 }
@@ -219,6 +254,7 @@ fn nan_input_never_enters_the_history() {
         gathered: raw,
         filtered: history,
         irradiance: blurred,
+        ..
     } = renderer.radiosity_buffers().unwrap();
     let source: Vec<deep_gbuffer::frame::SourceTexel> = bytemuck::pod_collect_to_vec(
         &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, source).unwrap(),

@@ -139,12 +139,14 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
 }
 
 
-fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
+// `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
+// at a lower one, so that every 4x4 block of texels holds the 16 turns).
+fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     let slices = max(ao.slices, 1u);
     let steps = max(ao.samples / (2u * slices), 1u);
     let spacing = r_px / f32(steps);
     let level = mip_coarsest(spacing, ao.levels);
-    let noise = slice_noise(pixel, 0u);
+    let noise = slice_noise(noise_at, 0u);
     let r2 = ao.radius * ao.radius;
     var total = 0.0;
     for (var k = 0u; k < slices; k++) {
@@ -192,19 +194,25 @@ fn slice_visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> 
     return clamp(1.0 - ao.intensity * total / f32(slices), 0.0, 1.0);
 }
 
+// The level of the rotated grid whose texels are computed (0: every pixel; 1: half, 2: quarter
+// resolution, each texel at the pixel it stands for, wgsl/upsample.wgsl filling in the rest).
+override LEVEL: u32 = 0u;
+
 @compute @workgroup_size(8, 8)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
+    let size = mip_size(LEVEL);
+    if gid.x >= size.x || gid.y >= size.y {
         return;
     }
-    let x = centre(gid.xy);
+    let pixel = mip_origin(LEVEL, gid.xy);
+    let x = centre(pixel);
     var v = 1.0;
     if x.r_px > 0.0 {
 #if SLICES
-        v = slice_visibility(gid.xy, x.c, x.n, x.r_px);
+        v = slice_visibility(pixel, gid.xy, x.c, x.n, x.r_px);
 #else
-        v = visibility(gid.xy, x.c, x.n, x.r_px);
+        v = visibility(pixel, x.c, x.n, x.r_px);
 #endif
     }
-    av[gid.y * frame.width + gid.x] = v;
+    av[gid.y * size.x + gid.x] = v;
 }

@@ -197,7 +197,9 @@ fn source_offset(l: u32) -> u32 {
 const PI_R: f32 = 3.14159265;
 
 // The `slices` gather at `pixel` (layer-0 sample s): irradiance and confidence.
-fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
+// `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
+// at a lower one, so that every 4x4 block of texels holds the 16 turns).
+fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32> {
     let c = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
     let r_px = params.radius * pixels_per_unit(frame, s.depth);
@@ -205,7 +207,7 @@ fn slices_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     let steps = max(params.samples / (2u * slices), 1u);
     let spacing = r_px / f32(steps);
     let coarsest = mip_coarsest(spacing, params.levels);
-    let noise = slice_noise(pixel, params.turn);
+    let noise = slice_noise(noise_at, params.turn);
     var seen = vec3<f32>(0.0);
     var covered = 0.0;
     for (var k = 0u; k < slices; k++) {
@@ -317,21 +319,28 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     return vec4<f32>(e * confidence, confidence);
 }
 
+// The level of the rotated grid whose texels the gather computes (0: every pixel; 1: half, 2:
+// quarter resolution, each texel at the pixel it stands for, wgsl/upsample.wgsl filling in the
+// rest before the temporal filter).
+override LEVEL: u32 = 0u;
+
 @compute @workgroup_size(8, 8)
 fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
+    let size = mip_size(LEVEL);
+    if gid.x >= size.x || gid.y >= size.y {
         return;
     }
-    let p = gid.y * frame.width + gid.x;
-    let s = sample0(p);
+    let pixel = mip_origin(LEVEL, gid.xy);
+    let t = gid.y * size.x + gid.x;
+    let s = sample0(pixel.y * frame.width + pixel.x);
     if !(s.depth > 0.0) || params.samples == 0u {
-        raw[p] = vec4<f32>(0.0);
+        raw[t] = vec4<f32>(0.0);
         return;
     }
 #if SLICES
-    raw[p] = slices_gather(gid.xy, s);
+    raw[t] = slices_gather(pixel, gid.xy, s);
 #else
-    raw[p] = spiral_gather(gid.xy, s);
+    raw[t] = spiral_gather(pixel, s);
 #endif
 }
 

@@ -4,13 +4,13 @@ use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::mat_mul;
 pub use crate::cpu::frame::view_position;
-use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_texel};
+use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
 use crate::frame::FrameUniform;
 use crate::frame::PyramidLayout;
 use crate::gbuffer::GSample;
-use crate::settings::{AoEstimator, AoSettings};
+use crate::settings::{AoEstimator, AoSettings, downsample_level};
 
 fn obscurance(s: &AoSettings, c: Vec3, n: Vec3, y: Vec3) -> f32 {
     let v = y - c;
@@ -19,7 +19,9 @@ fn obscurance(s: &AoSettings, c: Vec3, n: Vec3, y: Vec3) -> f32 {
     (1.0 - vv / r2).max(0.0) * ((v.dot(n) - s.bias) / (vv + 1e-4 * r2).sqrt()).max(0.0)
 }
 
-/// AV of every pixel by `s.estimator`. `pyramid1` is `None` for one-layer obscurance.
+/// AV by `s.estimator` of every texel of the level `s.downsample` computes (every pixel at 1;
+/// at 2 and 4 each texel of the rotated grid's level 1 or 2 at the pixel it stands for, before
+/// the upsample). `pyramid1` is `None` for one-layer obscurance.
 pub fn ao(
     f: &FrameUniform,
     s: &AoSettings,
@@ -29,14 +31,19 @@ pub fn ao(
     pyramid1: Option<&[f32]>,
 ) -> Vec<f32> {
     let kernel = Kernel { f, s, layout, pyramid0, pyramid1 };
-    let mut out = vec![1.0; (f.width * f.height) as usize];
-    for y in 0..f.height {
-        for x in 0..f.width {
+    let level = downsample_level(s.downsample) as usize;
+    let size = mip_size(f.width, f.height, level);
+    let mut out = vec![1.0; (size.0 * size.1) as usize];
+    for ty in 0..size.1 {
+        for tx in 0..size.0 {
+            let (x, y) = mip_origin(f.width, f.height, level, (tx, ty));
             let p = (y * f.width + x) as usize;
             let Some((c, n, r_px)) = kernel.centre(x, y, layer0[p].normal) else { continue };
-            out[p] = match s.estimator {
+            out[(ty * size.0 + tx) as usize] = match s.estimator {
                 AoEstimator::Sao => kernel.sao((x, y), c, n, r_px),
-                AoEstimator::Horizon | AoEstimator::Bitmask => kernel.slices((x, y), c, n, r_px),
+                AoEstimator::Horizon | AoEstimator::Bitmask => {
+                    kernel.slices((x, y), (tx, ty), c, n, r_px)
+                }
             };
         }
     }
@@ -104,13 +111,13 @@ impl Kernel<'_> {
     }
 
     /// As `slice_visibility`: the `horizon` and `bitmask` estimators.
-    fn slices(&self, (x, y): (u32, u32), c: Vec3, n: Vec3, r_px: f32) -> f32 {
+    fn slices(&self, (x, y): (u32, u32), noise_at: (u32, u32), c: Vec3, n: Vec3, r_px: f32) -> f32 {
         let (f, s) = (self.f, self.s);
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
         let spacing = r_px / steps as f32;
         let level = mip_coarsest(spacing, self.layout);
-        let noise = slice_noise(x, y, 0);
+        let noise = slice_noise(noise_at.0, noise_at.1, 0);
         let thickness = s.solid_depth();
         let r2 = s.radius * s.radius;
         let falloff = |front2: f32| (1.0 - front2 / r2).max(0.0);

@@ -14,3 +14,4 @@ pub mod resolve;
 pub mod shadow;
 pub mod slices;
 pub mod spiral;
+pub mod upsample;

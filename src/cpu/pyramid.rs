@@ -3,6 +3,7 @@
 use glam::Vec2;
 
 use crate::frame::PyramidLayout;
+pub use crate::frame::mip_size;
 
 /// All levels of the pyramid of `depth` (`layout.levels[0]` is `depth` itself), packed at the
 /// layout's offsets.
@@ -29,15 +30,15 @@ pub fn rotated_grid<T: Copy + Default>(base: &[T], layout: &PyramidLayout) -> Ve
     out
 }
 
-/// As `mip_origin` (`wgsl/shared/mip.wgsl`): the level-0 pixel texel `t` of `level` was taken
-/// from.
-fn mip_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32) {
+/// As `mip_origin`: the level-0 pixel texel `t` of `level` of a `width` x `height` image's chain
+/// was taken from.
+pub fn mip_origin(width: u32, height: u32, level: usize, t: (u32, u32)) -> (u32, u32) {
     let mut p = t;
     for l in (1..=level).rev() {
-        let below = layout.levels[l - 1];
+        let below = mip_size(width, height, l - 1);
         p = (
-            (2 * p.0 + ((p.1 & 1) ^ 1)).min(below.width - 1),
-            (2 * p.1 + ((p.0 & 1) ^ 1)).min(below.height - 1),
+            (2 * p.0 + ((p.1 & 1) ^ 1)).min(below.0 - 1),
+            (2 * p.1 + ((p.0 & 1) ^ 1)).min(below.1 - 1),
         );
     }
     p
@@ -48,7 +49,7 @@ fn mip_origin(layout: &PyramidLayout, level: usize, t: (u32, u32)) -> (u32, u32)
 pub fn mip_texel(layout: &PyramidLayout, (tx, ty): (u32, u32), level: usize) -> (usize, Vec2) {
     let l = layout.levels[level];
     let texel = (tx >> level, ty >> level);
-    let origin = mip_origin(layout, level, texel);
+    let origin = mip_origin(layout.levels[0].width, layout.levels[0].height, level, texel);
     let q = (l.offset + texel.1 * l.width + texel.0) as usize;
     (q, Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5)
 }

@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
-use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_texel, rotated_grid};
+use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel, rotated_grid};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap_turned};
 use crate::frame::{FrameUniform, PyramidLayout, RadiosityUniform, SourceTexel};
@@ -49,27 +49,32 @@ pub fn source(
     rotated_grid(&base, layout)
 }
 
-/// The gathered irradiance (rgb) and confidence (w) of every layer-0 pixel, by the estimator
-/// `u.estimator` names, from the gather `source` (levels of `layout`); `layers` give the centre
-/// points and the spiral's normals.
+/// The gathered irradiance (rgb) and confidence (w), by the estimator `u.estimator` names, of
+/// every texel of the rotated grid's `level` (0: every layer-0 pixel; above, each texel at the
+/// pixel it stands for, before the upsample), from the gather `source` (levels of `layout`);
+/// `layers` give the centre points and the spiral's normals.
 pub fn gather(
     f: &FrameUniform,
     u: &RadiosityUniform,
     layers: [&[GSample]; 2],
     source: &[SourceTexel],
     layout: &PyramidLayout,
+    level: usize,
 ) -> Vec<Vec4> {
     let g = Gather { f, u, layers, source, layout };
-    let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
-    for y in 0..f.height {
-        for x in 0..f.width {
+    let size = mip_size(f.width, f.height, level);
+    let mut out = vec![Vec4::ZERO; (size.0 * size.1) as usize];
+    for ty in 0..size.1 {
+        for tx in 0..size.0 {
+            let (x, y) = mip_origin(f.width, f.height, level, (tx, ty));
             let p = (y * f.width + x) as usize;
+            let texel = (ty * size.0 + tx) as usize;
             let s = &layers[0][p];
             if s.depth.is_nan() || s.depth <= 0.0 || u.samples == 0 {
                 continue;
             }
             if u.estimator == 1 {
-                out[p] = g.slices((x, y));
+                out[texel] = g.slices((x, y), (tx, ty));
                 continue;
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
@@ -117,7 +122,7 @@ pub fn gather(
                 _ => 2.0 * PI / m as f32 * sum,
             };
             let confidence = m as f32 / u.samples as f32;
-            out[p] = (e * confidence).extend(confidence);
+            out[texel] = (e * confidence).extend(confidence);
         }
     }
     out
@@ -134,7 +139,7 @@ struct Gather<'a> {
 
 impl Gather<'_> {
     /// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
-    fn slices(&self, (x, y): (u32, u32)) -> Vec4 {
+    fn slices(&self, (x, y): (u32, u32), noise_at: (u32, u32)) -> Vec4 {
         let (f, u) = (self.f, self.u);
         let s = &self.layers[0][(y * f.width + x) as usize];
         let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
@@ -144,7 +149,7 @@ impl Gather<'_> {
         let steps = (u.samples / (2 * slices)).max(1);
         let spacing = r_px / steps as f32;
         let coarsest = mip_coarsest(spacing, self.layout);
-        let noise = slice_noise(x, y, u.turn);
+        let noise = slice_noise(noise_at.0, noise_at.1, u.turn);
         let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
         for k in 0..slices {
             let sl = Slice::at(f, k, slices, noise, c, n);

@@ -16,7 +16,7 @@ mod shadow;
 mod source;
 mod uniforms;
 
-pub use pyramid::{Level, MAX_LEVELS, PyramidLayout};
+pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
 pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{

@@ -46,3 +46,10 @@ impl PyramidLayout {
         u64::from(self.total) * 4
     }
 }
+
+/// The size of `level` of a `width` x `height` image's MIP chain: halved (rounding up) `level`
+/// times (`mip_size` in `wgsl/shared/mip.wgsl`; within [`MAX_LEVELS`], the size of
+/// [`PyramidLayout`]'s level).
+pub fn mip_size(width: u32, height: u32, level: usize) -> (u32, u32) {
+    (0..level).fold((width, height), |(w, h), _| (w.div_ceil(2), h.div_ceil(2)))
+}

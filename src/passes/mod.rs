@@ -21,6 +21,7 @@ pub(crate) mod raster;
 pub(crate) mod reflections;
 pub(crate) mod resolve;
 pub(crate) mod shadow;
+pub(crate) mod upsample;
 
 use crate::SceneBuffers;
 use crate::gpu::{Pipelines, Timestamps};

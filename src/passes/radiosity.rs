@@ -2,11 +2,12 @@
 
 use super::blur::Blur;
 use super::pyramid::Pyramid;
+use super::upsample::Upsample;
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::RadiosityUniform;
+use crate::frame::{RadiosityUniform, mip_size};
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
-use crate::settings::{RadiosityEstimator, Settings};
+use crate::settings::{RadiosityEstimator, Settings, downsample_level};
 
 /// The radiosity's buffers, as
 /// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them: the gather
@@ -17,6 +18,10 @@ pub struct RadiosityBuffers<'a> {
     /// and outgoing radiance B of both layers: direct + emission + damped indirect light), then
     /// its MIP levels (as [`PyramidLayout`](crate::frame::PyramidLayout) places them).
     pub source: &'a wgpu::Buffer,
+    /// The gather at 1 / [`RadiositySettings::downsample`](crate::RadiositySettings) of the
+    /// image's width and height (a texel of that level of the rotated grid each, before the
+    /// upsample into `gathered`); `None` at full resolution.
+    pub low: Option<&'a wgpu::Buffer>,
     /// The gather's irradiance (rgb) and confidence (a).
     pub gathered: &'a wgpu::Buffer,
     /// The temporally filtered irradiance and confidence.
@@ -39,6 +44,9 @@ pub(crate) struct RadiosityStage {
     uniform: wgpu::Buffer,
     source: wgpu::Buffer,
     levels: Pyramid,
+    /// The level of the rotated grid the gather computes, and its buffer when that is not 0.
+    level: u32,
+    low: Option<wgpu::Buffer>,
     gathered: wgpu::Buffer,
     history: [wgpu::Buffer; 2],
     /// Which `history` this (or, between frames, the last) frame filters into.
@@ -58,7 +66,13 @@ impl RadiosityStage {
         let buffer = |label| storage(label, pixels * 16);
         let levels = Pyramid::new(device, s.width, s.height);
         let texels = u64::from(levels.layout().total);
+        let level = downsample_level(s.radiosity.downsample);
+        let (w, h) = mip_size(s.width, s.height, level as usize);
+        let low = (level > 0)
+            .then(|| storage("deep-gbuffer.radiosity.low", u64::from(w) * u64::from(h) * 16));
         RadiosityStage {
+            level,
+            low,
             uniform: gpu::uniform_buffer_for::<RadiosityUniform>(device, "deep-gbuffer.radiosity"),
             source: storage("deep-gbuffer.radiosity.source", texels * 16),
             levels,
@@ -88,6 +102,7 @@ impl RadiosityStage {
         let filtered = &self.history[self.current];
         RadiosityBuffers {
             source: &self.source,
+            low: self.low.as_ref(),
             gathered: &self.gathered,
             filtered,
             irradiance: if s.radiosity.blur_radius > 0 { &self.blurred } else { filtered },
@@ -136,7 +151,23 @@ impl Stage for RadiosityStage {
                         (level.width, level.height),
                     );
                 }
-                run(&mut pass, "radiosity_gather");
+                let level = [("LEVEL", f64::from(self.level))];
+                let pipeline = ctx.pipelines.get(
+                    ctx.device,
+                    "radiosity",
+                    "radiosity_gather",
+                    &defines,
+                    &level,
+                );
+                let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
+                // At a lower resolution the gather writes its own buffer, upsampled into `raw`.
+                let target = self.low.as_ref().unwrap_or(&self.gathered);
+                let gather = entries.map(|(s, b)| (s, if s == slot::RAW { target } else { b }));
+                pipeline.dispatch_pixels(ctx.device, &mut pass, &gather, size);
+                if let Some(low) = &self.low {
+                    let upsample = Upsample { level: self.level, vec4: true, empty: 0.0 };
+                    upsample.record(ctx, &mut pass, [low, &self.gathered]);
+                }
             }
             PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal"),
             PassId::RadiosityBlur => {
