@@ -69,8 +69,9 @@ pub use passes::radiosity::RadiosityBuffers;
 pub use plan::{Effect, PassId, Plan, Reason};
 pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, GpuTextureSlot, ImportedBuffers, SceneBuffers};
-pub use scene::{Camera, Filter, Material, Projection, Scene, SceneInfo, TextureRef, Wrap};
+pub use scene::{Camera, Filter, Lens, Material, Projection, Scene, SceneInfo, TextureRef, Wrap};
 pub use settings::{
-    AoEstimator, AoSettings, AtomicPath, Boost, Effects, Layer1Variant, Normalization, Precision,
-    Preset, RadiosityEstimator, RadiositySettings, ReflectionSettings, Settings, ShadowSettings,
+    AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant, Normalization,
+    Precision, Preset, RadiosityEstimator, RadiositySettings, ReflectionSettings, Settings,
+    ShadowSettings,
 };

@@ -81,8 +81,9 @@ struct SweepArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
-    /// scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
+    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
+    /// subset; the rest from the scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// Move the camera along its line of sight until the whole scene is in view (its direction
@@ -165,8 +166,9 @@ struct TruthArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
-    /// scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
+    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
+    /// subset; the rest from the scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// Move the camera along its line of sight until the whole scene is in view (its direction
@@ -301,6 +303,8 @@ struct EffectArgs {
     radiosity: RadiosityArgs,
     #[command(flatten)]
     reflections: ReflectionArgs,
+    #[command(flatten)]
+    dof: DofArgs,
 }
 
 impl EffectArgs {
@@ -309,6 +313,33 @@ impl EffectArgs {
         self.ao.apply(&mut s.ao);
         self.radiosity.apply(&mut s.radiosity);
         self.reflections.apply(&mut s.reflections);
+        self.dof.apply(&mut s.dof);
+    }
+}
+
+/// The depth of field's settings (it runs when the camera's lens has an aperture:
+/// `--camera aperture=R,focus=D`). Those not given keep the default's value.
+#[derive(clap::Args)]
+struct DofArgs {
+    /// Rays through the lens per pixel [default: 24].
+    #[arg(long)]
+    dof_samples: Option<u32>,
+    /// The largest circle of confusion followed, in pixels [default: 32].
+    #[arg(long)]
+    dof_max_coc: Option<f32>,
+    /// Stop lens rays at layer 0 (do not let them find what it hides).
+    #[arg(long)]
+    dof_one_layer: bool,
+}
+
+impl DofArgs {
+    /// Sets what was given on `d`.
+    fn apply(&self, d: &mut deep_gbuffer::DofSettings) {
+        d.samples = self.dof_samples.unwrap_or(d.samples);
+        d.max_coc = self.dof_max_coc.unwrap_or(d.max_coc);
+        if self.dof_one_layer {
+            d.two_layers = false;
+        }
     }
 }
 
@@ -348,8 +379,9 @@ struct RenderArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d (any subset; the rest from the
-    /// scene's camera).
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
+    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
+    /// subset; the rest from the scene's camera).
     #[arg(long)]
     camera: Option<String>,
     /// Move the camera along its line of sight until the whole scene is in view (its direction
@@ -466,7 +498,7 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// Applies `eye=x,y,z,target=x,y,z,fov=deg` to `camera`.
+/// Applies `eye=x,y,z,target=x,y,z,fov=deg,aperture=r,focus=d` to `camera`.
 fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
     let bad = |m: String| Error::InvalidSetting { name: "camera", message: m };
     let mut key: Option<&str> = None;
@@ -506,9 +538,12 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
                 Projection::Perspective { far, .. } => *far = Some(d),
                 Projection::Orthographic { far, .. } => *far = d,
             },
+            ("aperture", &[r]) => camera.lens.radius = r,
+            ("focus", &[d]) => camera.lens.focus = d,
             (k, v) => {
                 return Err(bad(format!(
-                    "`{k}` with {} values (expected eye, target, up: 3; fov, near, far: 1)",
+                    "`{k}` with {} values (expected eye, target, up: 3; fov, near, far, aperture, \
+                     focus: 1)",
                     v.len()
                 )));
             }

@@ -51,6 +51,8 @@ pub enum PassId {
     Reflections,
     /// `DIRECT + AV * AMBIENT + RADIOSITY + REFLECTIONS` into the HDR image.
     Composite,
+    /// Depth of field: the composite seen through the camera's lens.
+    Dof,
 }
 
 /// The part of the renderer that records a pass.
@@ -64,11 +66,12 @@ pub(crate) enum StageId {
     Radiosity,
     Reflections,
     Composite,
+    Dof,
 }
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 14] = [
+    pub const FIXED: [PassId; 15] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -83,6 +86,7 @@ impl PassId {
         PassId::RadiosityBlur,
         PassId::Reflections,
         PassId::Composite,
+        PassId::Dof,
     ];
 
     /// The pass's name: `raster.layer0`, `ao.blur`, `shadow.<light name>`, ...
@@ -103,6 +107,7 @@ impl PassId {
             PassId::RadiosityBlur => "radiosity.blur",
             PassId::Reflections => "reflections",
             PassId::Composite => "composite",
+            PassId::Dof => "dof",
         })
     }
 
@@ -117,6 +122,7 @@ impl PassId {
                 Some(Effect::Radiosity)
             }
             PassId::Reflections => Some(Effect::Reflections),
+            PassId::Dof => Some(Effect::Dof),
             _ => None,
         }
     }
@@ -144,6 +150,7 @@ impl PassId {
             }
             PassId::Reflections => StageId::Reflections,
             PassId::Composite => StageId::Composite,
+            PassId::Dof => StageId::Dof,
         }
     }
 
@@ -172,12 +179,20 @@ pub enum Effect {
     Radiosity,
     /// Screen-space reflections (need a reflective material).
     Reflections,
+    /// Depth of field (needs a camera lens with an aperture).
+    Dof,
 }
 
 impl Effect {
     /// Every effect.
-    pub const ALL: [Effect; 5] =
-        [Effect::Ao, Effect::Direct, Effect::Shadows, Effect::Radiosity, Effect::Reflections];
+    pub const ALL: [Effect; 6] = [
+        Effect::Ao,
+        Effect::Direct,
+        Effect::Shadows,
+        Effect::Radiosity,
+        Effect::Reflections,
+        Effect::Dof,
+    ];
 
     /// The effect's name, as `--effects` spells it.
     pub fn name(self) -> &'static str {
@@ -187,6 +202,7 @@ impl Effect {
             Effect::Shadows => "shadows",
             Effect::Radiosity => "radiosity",
             Effect::Reflections => "reflections",
+            Effect::Dof => "dof",
         }
     }
 }
@@ -246,7 +262,8 @@ pub fn pixels_spanned(
 
 impl Plan {
     /// The plan for a scene with `info` under `settings`, whatever the camera (an effect whose
-    /// radius is under a pixel still runs: see [`for_view`](Plan::for_view)).
+    /// radius is under a pixel still runs: see [`for_view`](Plan::for_view); depth of field,
+    /// which needs a camera lens, does not).
     pub fn new(info: &SceneInfo, settings: &Settings) -> Plan {
         Plan::build(info, settings, None)
     }
@@ -309,7 +326,16 @@ impl Plan {
             info.reflective,
             true,
         );
-        let wants_layer1 = (ao && settings.ao.two_layers) || radiosity || reflections;
+        let dof = decide(
+            Effect::Dof,
+            settings.dof.enabled && e.dof,
+            camera.is_some_and(|c| c.lens.blurs()),
+            true,
+        );
+        let wants_layer1 = (ao && settings.ao.two_layers)
+            || radiosity
+            || reflections
+            || (dof && settings.dof.two_layers);
         let layers = match settings.layers {
             1 => 1,
             2 => 2,
@@ -347,6 +373,9 @@ impl Plan {
             passes.push(PassId::Reflections);
         }
         passes.push(PassId::Composite);
+        if dof {
+            passes.push(PassId::Dof);
+        }
         Plan {
             layers,
             ao_two_layers: layers == 2 && settings.ao.two_layers,
@@ -413,6 +442,7 @@ impl fmt::Display for Plan {
         writeln!(f, "direct:  {}", why(Effect::Direct))?;
         writeln!(f, "radiosity: {}", why(Effect::Radiosity))?;
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
+        writeln!(f, "dof:     {}", why(Effect::Dof))?;
         let shadows: Vec<String> = self
             .shadow_lights()
             .into_iter()

@@ -15,6 +15,7 @@ use crate::gpu::{self, PassTiming, Pipelines, Requirements, Timestamps};
 use crate::passes::ao::AoStage;
 use crate::passes::composite::CompositeStage;
 use crate::passes::direct::DirectStage;
+use crate::passes::dof::DofStage;
 use crate::passes::present::Present;
 use crate::passes::radiosity::{RadiosityBuffers, RadiosityStage};
 use crate::passes::raster::RasterStage;
@@ -140,6 +141,7 @@ struct Stages {
     radiosity: Option<RadiosityStage>,
     reflections: Option<ReflectionsStage>,
     composite: CompositeStage,
+    dof: Option<DofStage>,
 }
 
 impl Stages {
@@ -154,6 +156,7 @@ impl Stages {
             radiosity: None,
             reflections: None,
             composite: CompositeStage::new(device, pixels),
+            dof: None,
         }
     }
 
@@ -169,6 +172,7 @@ impl Stages {
             StageId::Radiosity => self.radiosity.as_ref().expect(prepared),
             StageId::Reflections => self.reflections.as_ref().expect(prepared),
             StageId::Composite => &self.composite,
+            StageId::Dof => self.dof.as_ref().expect(prepared),
         }
     }
 
@@ -181,6 +185,7 @@ impl Stages {
         stages.extend(self.radiosity.as_ref().map(|s| s as &dyn Stage));
         stages.extend(self.reflections.as_ref().map(|s| s as &dyn Stage));
         stages.push(&self.composite);
+        stages.extend(self.dof.as_ref().map(|s| s as &dyn Stage));
         stages
     }
 
@@ -213,6 +218,8 @@ impl Stages {
                 .filter(|_| runs(Effect::Reflections))
                 .map(|r| r.output()),
             environment,
+            hdr: self.composite.hdr(),
+            sharp: self.dof.as_ref().filter(|_| runs(Effect::Dof)).map(DofStage::sharp),
         }
     }
 }
@@ -614,6 +621,11 @@ impl Renderer {
             reflections.prepare(queue, s, scene, plan.layers == 2, env);
         }
         st.composite.prepare(queue, scene);
+        if plan.runs(Effect::Dof) {
+            let pixels = u64::from(s.width) * u64::from(s.height);
+            let dof = st.dof.get_or_insert_with(|| DofStage::new(device, pixels));
+            dof.prepare(queue, s, camera, scene.info());
+        }
         Ok(current)
     }
 
@@ -932,13 +944,20 @@ impl Renderer {
         self.stages.composite.hdr()
     }
 
+    /// The image through a pinhole (the composite) when depth of field ran in the last frame
+    /// (`hdr_buffer` then holds the image through the lens), else `None`.
+    pub fn sharp_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.stages.dof.as_ref().filter(|_| self.ran(Effect::Dof)).map(DofStage::sharp)
+    }
+
     /// The direct radiance of layer 0 in the last frame (`vec4<f32>` per pixel; zero when no
     /// light runs).
     pub fn direct_buffer(&self) -> &wgpu::Buffer {
         self.stages.direct.radiance(0)
     }
 
-    /// The direct radiance of layer 1 (computed when radiosity or reflections read it).
+    /// The direct radiance of layer 1 (computed when radiosity, reflections or depth of field
+    /// read it).
     pub fn direct1_buffer(&self) -> &wgpu::Buffer {
         self.stages.direct.radiance(1)
     }

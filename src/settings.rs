@@ -643,6 +643,8 @@ pub struct Settings {
     pub radiosity: RadiositySettings,
     /// Screen-space reflections.
     pub reflections: ReflectionSettings,
+    /// Depth of field (runs when the camera's lens has an aperture).
+    pub dof: DofSettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: Effects,
 }
@@ -662,6 +664,7 @@ impl Default for Settings {
             shadows: ShadowSettings::default(),
             radiosity: RadiositySettings::default(),
             reflections: ReflectionSettings::default(),
+            dof: DofSettings::default(),
             effects: Effects::default(),
         }
     }
@@ -737,6 +740,9 @@ impl Settings {
         if self.reflections.enabled {
             self.reflections.validate()?;
         }
+        if self.dof.enabled {
+            self.dof.validate()?;
+        }
         Ok(())
     }
 }
@@ -755,11 +761,20 @@ pub struct Effects {
     pub radiosity: bool,
     /// Screen-space reflections (need a reflective material).
     pub reflections: bool,
+    /// Depth of field (needs a camera lens with an aperture).
+    pub dof: bool,
 }
 
 impl Default for Effects {
     fn default() -> Self {
-        Effects { ao: true, direct: true, shadows: true, radiosity: true, reflections: true }
+        Effects {
+            ao: true,
+            direct: true,
+            shadows: true,
+            radiosity: true,
+            reflections: true,
+            dof: true,
+        }
     }
 }
 
@@ -775,6 +790,7 @@ impl Effects {
             shadows: false,
             radiosity: false,
             reflections: false,
+            dof: false,
         };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
@@ -783,11 +799,12 @@ impl Effects {
                 "shadows" => e.shadows = true,
                 "radiosity" => e.radiosity = true,
                 "reflections" => e.reflections = true,
+                "dof" => e.dof = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
                         format!(
-                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections; or auto)"
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections, dof; or auto)"
                         ),
                     ));
                 }
@@ -810,4 +827,55 @@ fn check_downsample(name: &'static str, downsample: u32) -> Result<()> {
 /// size is computed at (0 at full resolution, 1 at half, 2 at quarter).
 pub fn downsample_level(downsample: u32) -> u32 {
     downsample.max(1).ilog2()
+}
+
+/// Depth of field through the camera's thin lens ([`Lens`](crate::scene::Lens); `wgsl/dof.wgsl`,
+/// documented there): per pixel, rays through `samples` points of the lens are marched across
+/// the image, through both layers, to the first surface they meet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DofSettings {
+    /// Run the pass (when the lens has an aperture).
+    pub enabled: bool,
+    /// Rays through the lens per pixel. 1 to 256.
+    pub samples: u32,
+    /// The largest circle of confusion followed, in pixels (radius); surfaces blurred more are
+    /// found only within it. 1 to 256.
+    pub max_coc: f32,
+    /// How far behind its surface a layer is solid, as a fraction of its view depth: a lens ray
+    /// passing behind a surface by more runs on to what lies behind (layer 1, or beyond).
+    pub thickness: f32,
+    /// Let rays find layer 1 behind a surface they pass (the deep G-buffer's use here); `false`
+    /// stops them at layer 0.
+    pub two_layers: bool,
+}
+
+impl Default for DofSettings {
+    fn default() -> Self {
+        DofSettings { enabled: true, samples: 24, max_coc: 32.0, thickness: 0.1, two_layers: true }
+    }
+}
+
+impl DofSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=256).contains(&self.samples) {
+            return Err(Error::setting(
+                "dof.samples",
+                format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if !(self.max_coc.is_finite() && (1.0..=256.0).contains(&self.max_coc)) {
+            return Err(Error::setting(
+                "dof.max_coc",
+                format!("{} (must be 1 to 256 pixels)", self.max_coc),
+            ));
+        }
+        if !(self.thickness.is_finite() && self.thickness > 0.0) {
+            return Err(Error::setting(
+                "dof.thickness",
+                format!("{} (must be finite and > 0)", self.thickness),
+            ));
+        }
+        Ok(())
+    }
 }

@@ -113,6 +113,7 @@ fn a_lit_plane_has_the_closed_form_radiance() {
         target: Vec3::ZERO,
         up: Vec3::NEG_Z,
         projection: Projection::Orthographic { height: 2.0, near: 0.1, far: 10.0 },
+        lens: Default::default(),
     };
     let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(16, 16) });
     let g = gpu();

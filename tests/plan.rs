@@ -38,7 +38,11 @@ fn cornell_info() -> SceneInfo {
 fn cornell_runs_everything_it_has() {
     let plan = Plan::new(&cornell_info(), &Settings::default());
     assert_eq!(plan.layers, 2);
-    assert_eq!(plan.left_out, [(Effect::Reflections, Reason::NotNeeded)], "no mirror in the box");
+    assert_eq!(
+        plan.left_out,
+        [(Effect::Reflections, Reason::NotNeeded), (Effect::Dof, Reason::NotNeeded)],
+        "no mirror in the box, and its camera is a pinhole"
+    );
     assert_eq!(
         plan.passes,
         [

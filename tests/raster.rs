@@ -184,6 +184,7 @@ fn ortho(height: f32) -> Camera {
         target: Vec3::ZERO,
         up: Vec3::Y,
         projection: Projection::Orthographic { height, near: 0.1, far: 10.0 },
+        lens: Default::default(),
     }
 }
 

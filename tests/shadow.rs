@@ -34,6 +34,7 @@ fn occluder_scene(shift: f32) -> (Scene, Camera) {
         target: Vec3::ZERO,
         up: Vec3::NEG_Z,
         projection: Projection::Orthographic { height: 4.0, near: 0.1, far: 10.0 },
+        lens: Default::default(),
     };
     (scene, camera)
 }

@@ -5,6 +5,7 @@ pub mod ao;
 pub mod blur;
 pub mod composite;
 pub mod direct;
+pub mod dof;
 pub mod frame;
 pub mod pyramid;
 pub mod radiosity;

@@ -6,7 +6,7 @@ use glam::Vec2;
 
 use crate::frame::FrameUniform;
 
-const GOLDEN_TURNS: f32 = 0.381_966_01;
+pub(crate) const GOLDEN_TURNS: f32 = 0.381_966_01;
 
 /// As `pixel_hash`.
 pub fn pixel_hash(x: u32, y: u32) -> u32 {

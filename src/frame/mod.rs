@@ -20,8 +20,8 @@ pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
 pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
-    AoUniform, CompositeUniform, DirectUniform, FillParams, LevelUniform, RadiosityUniform,
-    RasterCounters, ReflectionsUniform,
+    AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform,
+    RadiosityUniform, RasterCounters, ReflectionsUniform,
 };
 
 /// A `#[repr(C)]` struct's size and field offsets, and the WGSL struct it mirrors.
@@ -70,6 +70,7 @@ pub const MIRRORED: &[MirrorLayout] = &[
     ReflectionsUniform::LAYOUT,
     DirectUniform::LAYOUT,
     CompositeUniform::LAYOUT,
+    DofUniform::LAYOUT,
     LevelUniform::LAYOUT,
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,

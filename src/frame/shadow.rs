@@ -48,6 +48,7 @@ pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
                     near: radius * 1e-3,
                     far: 4.0 * radius,
                 },
+                lens: Default::default(),
             }]
         }
         LightKind::Spot { position, direction, outer_cone, .. } => vec![Camera {
@@ -60,6 +61,7 @@ pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
                 far: None,
                 reverse_z: false,
             },
+            lens: Default::default(),
         }],
         LightKind::Point { position, .. } => {
             [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z]
@@ -74,6 +76,7 @@ pub fn face_cameras(light: &Light, bounds: (Vec3, Vec3)) -> Vec<Camera> {
                         far: None,
                         reverse_z: false,
                     },
+                    lens: Default::default(),
                 })
                 .collect()
         }

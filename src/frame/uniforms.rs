@@ -4,8 +4,10 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::{PyramidLayout, mirrored};
+use crate::scene::{Camera, Projection};
 use crate::settings::{
-    AoSettings, Normalization, RadiosityEstimator, RadiositySettings, ReflectionSettings,
+    AoSettings, DofSettings, Normalization, RadiosityEstimator, RadiositySettings,
+    ReflectionSettings,
 };
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
@@ -278,6 +280,84 @@ pub struct CompositeUniform {
 }
 
 mirrored!(CompositeUniform, "composite.wgsl", "Composite", [ambient]);
+
+/// Mirrors `struct Dof` in `wgsl/dof.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct DofUniform {
+    /// The ambient radiance (layer 1 is shaded with it).
+    pub ambient: [f32; 3],
+    /// Lens radius times the pixels per scene unit at view depth 1: the circle of confusion in
+    /// pixels per unit of 1/focus - 1/z.
+    pub lens_px: f32,
+    /// The signed circles of confusion a lens ray walks between, in pixels: those of the scene's
+    /// nearest and farthest view depths, within [`DofSettings::max_coc`] either way.
+    pub coc_range: [f32; 2],
+    /// 1 / the focus distance.
+    pub inv_focus: f32,
+    /// [`DofSettings::samples`].
+    pub samples: u32,
+    /// [`DofSettings::thickness`].
+    pub thickness: f32,
+    /// Padding.
+    pub _pad: [u32; 3],
+}
+
+mirrored!(
+    DofUniform,
+    "dof.wgsl",
+    "Dof",
+    [ambient, lens_px, coc_range, inv_focus, samples, thickness]
+);
+
+impl DofUniform {
+    /// The constants for `s`, seen through `camera` (a perspective camera whose lens has an
+    /// aperture) in an image `height` pixels tall, over a scene within `bounds` (`None`: unknown)
+    /// with the `ambient` radiance.
+    pub fn new(
+        s: &DofSettings,
+        camera: &Camera,
+        height: u32,
+        bounds: Option<(glam::Vec3, glam::Vec3)>,
+        ambient: [f32; 3],
+    ) -> Self {
+        let lens_px = camera.lens.radius * camera.pixels_of(1.0, 1.0, height);
+        let inv_focus = 1.0 / camera.lens.focus;
+        let coc = |z: f32| lens_px * (inv_focus - 1.0 / z);
+        let mut coc_range = [-s.max_coc, s.max_coc];
+        if let (Some((lo, hi)), Projection::Perspective { near, .. }) = (bounds, camera.projection)
+        {
+            // The view depths of the bounds' corners (no nearer than the near plane).
+            let view = camera.view();
+            let depths = (0..8).map(|i| {
+                let corner = glam::Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                (-view.transform_point3(corner).z).max(near)
+            });
+            let (z_min, z_max) =
+                depths.fold((f32::INFINITY, 0.0f32), |(a, b), z| (a.min(z), b.max(z)));
+            if z_min.is_finite() && z_max.is_finite() {
+                // A pixel's step may sit up to a pixel beyond the exact range.
+                coc_range = [
+                    (coc(z_min) - 1.0).clamp(-s.max_coc, s.max_coc),
+                    (coc(z_max) + 1.0).clamp(-s.max_coc, s.max_coc),
+                ];
+            }
+        }
+        DofUniform {
+            ambient,
+            lens_px,
+            coc_range,
+            inv_focus,
+            samples: s.samples,
+            thickness: s.thickness,
+            _pad: [0; 3],
+        }
+    }
+}
 
 /// Mirrors `struct PyramidLevel` in `wgsl/pyramid.wgsl`: one level's source and destination.
 #[repr(C)]

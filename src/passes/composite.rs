@@ -48,7 +48,7 @@ impl Stage for CompositeStage {
             (slot::COMPOSITE, &self.uniform),
             (slot::GBUFFER, ctx.gbuffer[0]),
             (slot::DIRECT, ctx.direct[0]),
-            (slot::HDR, &self.hdr),
+            (slot::HDR, ctx.sharp.unwrap_or(&self.hdr)),
         ];
         let terms = [
             ("AO", slot::AV, ctx.av),

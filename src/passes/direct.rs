@@ -78,8 +78,13 @@ impl Stage for DirectStage {
         let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
         // Layer 1's direct light feeds the radiosity and the reflections only.
         let plan = ctx.plan;
-        let layers =
-            if plan.runs(Effect::Radiosity) || plan.runs(Effect::Reflections) { 2 } else { 1 };
+        let dof_layer1 = plan.runs(Effect::Dof) && ctx.settings.dof.two_layers;
+        let layers = if plan.runs(Effect::Radiosity) || plan.runs(Effect::Reflections) || dof_layer1
+        {
+            2
+        } else {
+            1
+        };
         for layer in 0..layers {
             let mut entries = vec![
                 (slot::FRAME, ctx.frame),

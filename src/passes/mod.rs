@@ -13,6 +13,7 @@ pub(crate) mod baseline;
 pub(crate) mod blur;
 pub(crate) mod composite;
 pub(crate) mod direct;
+pub(crate) mod dof;
 pub(crate) mod fill;
 pub(crate) mod present;
 pub(crate) mod pyramid;
@@ -100,6 +101,11 @@ pub(crate) struct FrameContext<'a> {
     pub reflections: Option<&'a wgpu::Buffer>,
     /// The environment map missed reflection rays see, when one is set.
     pub environment: Option<&'a wgpu::Buffer>,
+    /// The HDR image the frame ends in.
+    pub hdr: &'a wgpu::Buffer,
+    /// Where the composite writes when depth of field runs after it (it then writes `hdr`);
+    /// `None`: the composite writes `hdr`.
+    pub sharp: Option<&'a wgpu::Buffer>,
 }
 
 impl FrameContext<'_> {

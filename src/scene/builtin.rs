@@ -63,6 +63,7 @@ pub fn cornell() -> Result<Scene> {
             far: None,
             reverse_z: false,
         },
+        lens: Default::default(),
     });
     // Sky light entering through the open front, for the ambient term.
     scene.ambient = Vec3::splat(0.08);

@@ -33,7 +33,24 @@ pub enum Projection {
     },
 }
 
-/// A camera: where it is, where it looks, and how it projects.
+/// A thin lens: the disc rays pass through and the distance that is sharp. A radius of 0 is a
+/// pinhole (the default): everything is sharp and no depth-of-field pass runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Lens {
+    /// Radius of the aperture, in scene units (0: pinhole).
+    pub radius: f32,
+    /// View depth of the plane in focus, in scene units (> 0 when `radius` > 0).
+    pub focus: f32,
+}
+
+impl Lens {
+    /// Whether the lens blurs anything (a radius above 0).
+    pub fn blurs(&self) -> bool {
+        self.radius > 0.0
+    }
+}
+
+/// A camera: where it is, where it looks, how it projects, and its lens.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     /// Eye position.
@@ -44,6 +61,8 @@ pub struct Camera {
     pub up: Vec3,
     /// Projection.
     pub projection: Projection,
+    /// The lens (a pinhole by default; depth of field for a perspective camera otherwise).
+    pub lens: Lens,
 }
 
 impl Camera {
@@ -61,6 +80,7 @@ impl Camera {
             target,
             up: Vec3::Y,
             projection: Projection::Perspective { fov_y_deg, near, far: None, reverse_z: false },
+            lens: Lens::default(),
         }
     }
 
@@ -160,6 +180,18 @@ impl Camera {
                 if !(far > near && near.is_finite() && far.is_finite()) {
                     return bad("far must be finite and beyond near");
                 }
+            }
+        }
+        let lens = self.lens;
+        if !(lens.radius.is_finite() && lens.radius >= 0.0) {
+            return bad("the lens radius (aperture) must be finite and >= 0");
+        }
+        if lens.blurs() {
+            if self.is_orthographic() {
+                return bad("a lens with an aperture needs a perspective camera");
+            }
+            if !(lens.focus.is_finite() && lens.focus > 0.0) {
+                return bad("the focus distance must be finite and > 0 when the aperture is open");
             }
         }
         Ok(())

@@ -425,7 +425,13 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
                     far: o.zfar(),
                 },
             };
-            scene.camera = Some(Camera { eye, target: eye + forward, up, projection });
+            scene.camera = Some(Camera {
+                eye,
+                target: eye + forward,
+                up,
+                projection,
+                lens: Default::default(),
+            });
         }
     }
     if used_default {

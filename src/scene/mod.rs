@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine2, Vec2, Vec3, Vec4};
 
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, Lens, Projection};
 pub use lighting::{GpuLight, SceneInfo};
 
 use crate::{Error, Result};

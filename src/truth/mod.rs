@@ -547,6 +547,12 @@ impl Tracer {
     /// along a path (diffuse paths cosine distributed, one per sample; a reflective surface adds
     /// a branch along one direction of its lobe).
     /// Pixels without a surface are not part of the image.
+    ///
+    /// Through a camera lens with an aperture ([`Lens`](crate::scene::Lens)) each sample is a
+    /// ray from a point of the lens disc (uniform over its area) through the pixel's point on the
+    /// focus plane (at view depth `focus` on the pinhole ray), traced to whatever it meets: the
+    /// thin-lens image the depth-of-field pass estimates (on the pixels whose pinhole ray meets a
+    /// surface).
     pub fn full(
         &self,
         scene: &Scene,
@@ -558,7 +564,26 @@ impl Tracer {
         let f = shot.frame()?;
         let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
+        let lens = shot.camera.lens;
+        let to_world = |v: [f32; 4]| mat_mul(&f.inv_view, v).xyz();
+        let (eye, right, up) = (
+            to_world([0.0, 0.0, 0.0, 1.0]),
+            to_world([1.0, 0.0, 0.0, 0.0]),
+            to_world([0.0, 1.0, 0.0, 0.0]),
+        );
         self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
+            if lens.blurs() {
+                // The pinhole ray's point at the focus depth (view space scales along the ray).
+                let view = mat_mul(&f.view, point.extend(1.0).to_array()).xyz();
+                let focus = to_world((view * (lens.focus / -view.z)).extend(1.0).to_array());
+                return Some(sample_mean(spp, || {
+                    let (u1, u2): (f32, f32) = (rng.random(), rng.random());
+                    let (r, phi) = (lens.radius * u1.sqrt(), 2.0 * PI * u2);
+                    let origin = eye + right * (r * phi.cos()) + up * (r * phi.sin());
+                    let w = (focus - origin).normalize();
+                    self.radiance(scene, &lighting, origin, w, bounces, rng)
+                }));
+            }
             let surface = Surface::of(s);
             let v = towards_eye(&f, point);
             Some(sample_mean(spp, || {
