@@ -1,9 +1,10 @@
 //! Whole frames timed with GPU timestamp queries (criterion `iter_custom`: the time criterion
 //! reports is the frame's GPU time, the sum of its passes), in three groups:
 //!
-//! - `passes`: every pass of the full GI frame and of the direct-only frame (the same direct
-//!   light and shadows, no obscurance, radiosity or reflections) on the Cornell box and a dense
-//!   scene at 256x256 and 1920x1080; their ratio is what the GI costs.
+//! - `passes`: every pass of the full GI frame, of the direct-only frame (the same direct
+//!   light and shadows, no obscurance, radiosity or reflections) and of the GI frame through a
+//!   lens (depth of field) on the Cornell box and a dense scene at 256x256 and 1920x1080; the
+//!   ratio of the first two is what the GI costs.
 //! - `triangles`: the two-layer raster (two-pass) and the resolve of `grid-N` for N from 1K to
 //!   5M triangles at 640x360; the slope is milliseconds per million triangles.
 //! - `resolution`: every pass of the Cornell frame from 256x256 to 3840x2160; the slope of each
@@ -66,7 +67,8 @@ fn direct_only() -> Effects {
 fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
     let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,grid-100000");
     let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
-    let _ = writeln!(out, "## Every pass, full GI frame and direct-only frame\n");
+    let _ =
+        writeln!(out, "## Every pass: full GI frame, direct-only frame, GI frame through a lens\n");
     let mut ratios = String::from(
         "| scene | size | GI frame ms | direct-only frame ms | GI / direct-only |\n|---|---|---:|---:|---:|\n",
     );
@@ -80,28 +82,35 @@ fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
                 bench_frames(c, gpu, &group, "gi", &buffers, &camera, Settings::with_size(w, h));
             let settings = Settings { effects: direct_only(), ..Settings::with_size(w, h) };
             let direct = bench_frames(c, gpu, &group, "direct-only", &buffers, &camera, settings);
-            let (full, direct) = match (full, direct) {
-                (Ok(f), Ok(d)) if f.frames > 0 && d.frames > 0 => (f, d),
-                (Ok(_), Ok(_)) => continue, // filtered out on the command line
-                (Err(e), _) | (_, Err(e)) => {
+            // The GI frame through a lens focused on the camera's target, its aperture a fiftieth
+            // of that distance: what the depth of field adds.
+            let mut lens_camera = camera.clone();
+            let focus = (camera.target - camera.eye).length();
+            lens_camera.lens = deep_gbuffer::Lens { radius: focus / 50.0, focus };
+            let settings = Settings::with_size(w, h);
+            let lens = bench_frames(c, gpu, &group, "gi-lens", &buffers, &lens_camera, settings);
+            let (full, direct, lens) = match (full, direct, lens) {
+                (Ok(f), Ok(d), Ok(l)) if f.frames > 0 && d.frames > 0 && l.frames > 0 => (f, d, l),
+                (Ok(_), Ok(_), Ok(_)) => continue, // filtered out on the command line
+                (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
                     let _ = writeln!(out, "{name} {w}x{h}: {e}\n");
                     continue;
                 }
             };
             let _ = writeln!(
                 out,
-                "{name} ({} triangles) {w}x{h}\n\n| pass | GI frame ms | direct-only ms |\n|---|---:|---:|",
+                "{name} ({} triangles) {w}x{h}\n\n| pass | GI frame ms | direct-only ms | GI through a lens ms |\n|---|---:|---:|---:|",
                 scene.triangle_count()
             );
-            for pass in full.ms.keys() {
-                let d = if direct.ms.contains_key(pass) {
-                    format!("{:.2}", direct.mean(pass))
-                } else {
-                    "-".into()
-                };
-                let _ = writeln!(out, "| `{pass}` | {:.2} | {d} |", full.mean(pass));
+            let column = |t: &PassTotals, pass: &str| {
+                if t.ms.contains_key(pass) { format!("{:.2}", t.mean(pass)) } else { "-".into() }
+            };
+            for pass in lens.ms.keys() {
+                let (f, d, l) = (column(&full, pass), column(&direct, pass), column(&lens, pass));
+                let _ = writeln!(out, "| `{pass}` | {f} | {d} | {l} |");
             }
-            let _ = writeln!(out, "| total | {:.2} | {:.2} |\n", full.frame(), direct.frame());
+            let (f, d, l) = (full.frame(), direct.frame(), lens.frame());
+            let _ = writeln!(out, "| total | {f:.2} | {d:.2} | {l:.2} |\n");
             let _ = writeln!(
                 ratios,
                 "| {name} | {w}x{h} | {:.2} | {:.2} | {:.2} |",
