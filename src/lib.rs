@@ -71,7 +71,7 @@ pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, GpuTextureSlot, ImportedBuffers, SceneBuffers};
 pub use scene::{Camera, Filter, Lens, Material, Projection, Scene, SceneInfo, TextureRef, Wrap};
 pub use settings::{
-    AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant, Normalization,
-    Precision, Preset, RadiosityEstimator, RadiositySettings, ReflectionSettings, Settings,
-    ShadowSettings,
+    AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant,
+    MotionBlurSettings, Normalization, Precision, Preset, RadiosityEstimator, RadiositySettings,
+    ReflectionSettings, Settings, ShadowSettings,
 };

@@ -305,6 +305,8 @@ struct EffectArgs {
     reflections: ReflectionArgs,
     #[command(flatten)]
     dof: DofArgs,
+    #[command(flatten)]
+    motion_blur: MotionBlurArgs,
 }
 
 impl EffectArgs {
@@ -314,6 +316,38 @@ impl EffectArgs {
         self.radiosity.apply(&mut s.radiosity);
         self.reflections.apply(&mut s.reflections);
         self.dof.apply(&mut s.dof);
+        self.motion_blur.apply(&mut s.motion_blur);
+    }
+}
+
+/// The motion blur's settings (it runs when the shutter is open and the camera moved since the
+/// last frame, as `--orbit` moves it). Those not given keep the default's value.
+#[derive(clap::Args)]
+struct MotionBlurArgs {
+    /// How long the shutter stays open before each frame, as a fraction of the time between
+    /// frames, 0 to 1 [default: 0, no motion blur].
+    #[arg(long)]
+    shutter: Option<f32>,
+    /// Instants of the shutter per pixel [default: 16].
+    #[arg(long)]
+    motion_samples: Option<u32>,
+    /// The longest streak followed, in pixels [default: 32].
+    #[arg(long)]
+    motion_max_blur: Option<f32>,
+    /// Read layer 0 only (do not show what a moving surface uncovers).
+    #[arg(long)]
+    motion_one_layer: bool,
+}
+
+impl MotionBlurArgs {
+    /// Sets what was given on `m`.
+    fn apply(&self, m: &mut deep_gbuffer::MotionBlurSettings) {
+        m.shutter = self.shutter.unwrap_or(m.shutter);
+        m.samples = self.motion_samples.unwrap_or(m.samples);
+        m.max_blur = self.motion_max_blur.unwrap_or(m.max_blur);
+        if self.motion_one_layer {
+            m.two_layers = false;
+        }
     }
 }
 

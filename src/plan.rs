@@ -53,6 +53,8 @@ pub enum PassId {
     Composite,
     /// Depth of field: the composite seen through the camera's lens.
     Dof,
+    /// Motion blur: the image over the time the shutter is open.
+    MotionBlur,
 }
 
 /// The part of the renderer that records a pass.
@@ -67,11 +69,12 @@ pub(crate) enum StageId {
     Reflections,
     Composite,
     Dof,
+    MotionBlur,
 }
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 15] = [
+    pub const FIXED: [PassId; 16] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -87,6 +90,7 @@ impl PassId {
         PassId::Reflections,
         PassId::Composite,
         PassId::Dof,
+        PassId::MotionBlur,
     ];
 
     /// The pass's name: `raster.layer0`, `ao.blur`, `shadow.<light name>`, ...
@@ -108,6 +112,7 @@ impl PassId {
             PassId::Reflections => "reflections",
             PassId::Composite => "composite",
             PassId::Dof => "dof",
+            PassId::MotionBlur => "motion_blur",
         })
     }
 
@@ -123,6 +128,7 @@ impl PassId {
             }
             PassId::Reflections => Some(Effect::Reflections),
             PassId::Dof => Some(Effect::Dof),
+            PassId::MotionBlur => Some(Effect::MotionBlur),
             _ => None,
         }
     }
@@ -151,7 +157,14 @@ impl PassId {
             PassId::Reflections => StageId::Reflections,
             PassId::Composite => StageId::Composite,
             PassId::Dof => StageId::Dof,
+            PassId::MotionBlur => StageId::MotionBlur,
         }
+    }
+
+    /// Whether the pass reads the composite's image and writes another (depth of field, motion
+    /// blur: they run after it, in plan order, the last writing the HDR image).
+    pub fn is_post(&self) -> bool {
+        matches!(self, PassId::Dof | PassId::MotionBlur)
     }
 
     /// Whether the pass draws or resolves the G-buffer (left out when the caller provides one).
@@ -181,17 +194,20 @@ pub enum Effect {
     Reflections,
     /// Depth of field (needs a camera lens with an aperture).
     Dof,
+    /// Motion blur (needs an open shutter and a camera that moved since the last frame).
+    MotionBlur,
 }
 
 impl Effect {
     /// Every effect.
-    pub const ALL: [Effect; 6] = [
+    pub const ALL: [Effect; 7] = [
         Effect::Ao,
         Effect::Direct,
         Effect::Shadows,
         Effect::Radiosity,
         Effect::Reflections,
         Effect::Dof,
+        Effect::MotionBlur,
     ];
 
     /// The effect's name, as `--effects` spells it.
@@ -203,6 +219,7 @@ impl Effect {
             Effect::Radiosity => "radiosity",
             Effect::Reflections => "reflections",
             Effect::Dof => "dof",
+            Effect::MotionBlur => "motion_blur",
         }
     }
 }
@@ -332,10 +349,19 @@ impl Plan {
             camera.is_some_and(|c| c.lens.blurs()),
             true,
         );
+        // Whether the camera moved is the renderer's to say (it keeps the last frame's camera):
+        // see `Plan::without_motion`.
+        let motion_blur = decide(
+            Effect::MotionBlur,
+            settings.motion_blur.enabled && e.motion_blur,
+            settings.motion_blur.shutter > 0.0,
+            true,
+        );
         let wants_layer1 = (ao && settings.ao.two_layers)
             || radiosity
             || reflections
-            || (dof && settings.dof.two_layers);
+            || (dof && settings.dof.two_layers)
+            || (motion_blur && settings.motion_blur.two_layers);
         let layers = match settings.layers {
             1 => 1,
             2 => 2,
@@ -376,6 +402,9 @@ impl Plan {
         if dof {
             passes.push(PassId::Dof);
         }
+        if motion_blur {
+            passes.push(PassId::MotionBlur);
+        }
         Plan {
             layers,
             ao_two_layers: layers == 2 && settings.ao.two_layers,
@@ -383,6 +412,16 @@ impl Plan {
             left_out,
             reused: Vec::new(),
         }
+    }
+
+    /// This plan for a frame whose camera has not moved since the last one (or that has no last
+    /// one): motion blur has nothing to blur, and is left out ([`Reason::NotNeeded`]).
+    pub fn without_motion(mut self) -> Plan {
+        if self.runs(Effect::MotionBlur) {
+            self.passes.retain(|p| *p != PassId::MotionBlur);
+            self.left_out.push((Effect::MotionBlur, Reason::NotNeeded));
+        }
+        self
     }
 
     /// Whether `effect` runs.
@@ -443,6 +482,7 @@ impl fmt::Display for Plan {
         writeln!(f, "radiosity: {}", why(Effect::Radiosity))?;
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
         writeln!(f, "dof:     {}", why(Effect::Dof))?;
+        writeln!(f, "motion blur: {}", why(Effect::MotionBlur))?;
         let shadows: Vec<String> = self
             .shadow_lights()
             .into_iter()

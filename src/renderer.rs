@@ -16,6 +16,7 @@ use crate::passes::ao::AoStage;
 use crate::passes::composite::CompositeStage;
 use crate::passes::direct::DirectStage;
 use crate::passes::dof::DofStage;
+use crate::passes::motion_blur::MotionBlurStage;
 use crate::passes::present::Present;
 use crate::passes::radiosity::{RadiosityBuffers, RadiosityStage};
 use crate::passes::raster::RasterStage;
@@ -142,6 +143,7 @@ struct Stages {
     reflections: Option<ReflectionsStage>,
     composite: CompositeStage,
     dof: Option<DofStage>,
+    motion_blur: Option<MotionBlurStage>,
 }
 
 impl Stages {
@@ -157,6 +159,7 @@ impl Stages {
             reflections: None,
             composite: CompositeStage::new(device, pixels),
             dof: None,
+            motion_blur: None,
         }
     }
 
@@ -173,6 +176,7 @@ impl Stages {
             StageId::Reflections => self.reflections.as_ref().expect(prepared),
             StageId::Composite => &self.composite,
             StageId::Dof => self.dof.as_ref().expect(prepared),
+            StageId::MotionBlur => self.motion_blur.as_ref().expect(prepared),
         }
     }
 
@@ -186,6 +190,7 @@ impl Stages {
         stages.extend(self.reflections.as_ref().map(|s| s as &dyn Stage));
         stages.push(&self.composite);
         stages.extend(self.dof.as_ref().map(|s| s as &dyn Stage));
+        stages.extend(self.motion_blur.as_ref().map(|s| s as &dyn Stage));
         stages
     }
 
@@ -219,7 +224,7 @@ impl Stages {
                 .map(|r| r.output()),
             environment,
             hdr: self.composite.hdr(),
-            sharp: self.dof.as_ref().filter(|_| runs(Effect::Dof)).map(DofStage::sharp),
+            post: self.composite.post(),
         }
     }
 }
@@ -483,6 +488,10 @@ impl Renderer {
     /// [`geometry_changed`](Renderer::geometry_changed)): its pass moves to [`Plan::reused`].
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
         let mut plan = Plan::for_view(scene.info(), &self.settings, camera);
+        let (w, h) = (self.settings.width, self.settings.height);
+        if self.history.is_none_or(|last| last == CameraMatrices::new(camera, w, h)) {
+            plan = plan.without_motion();
+        }
         if self.history.is_none()
             && let Some(i) = plan.passes.iter().position(|p| *p == PassId::RasterLayers)
         {
@@ -621,10 +630,16 @@ impl Renderer {
             reflections.prepare(queue, s, scene, plan.layers == 2, env);
         }
         st.composite.prepare(queue, scene);
+        if plan.passes.iter().any(PassId::is_post) {
+            st.composite.make_post(device);
+        }
         if plan.runs(Effect::Dof) {
-            let pixels = u64::from(s.width) * u64::from(s.height);
-            let dof = st.dof.get_or_insert_with(|| DofStage::new(device, pixels));
+            let dof = st.dof.get_or_insert_with(|| DofStage::new(device));
             dof.prepare(queue, s, camera, scene.info());
+        }
+        if plan.runs(Effect::MotionBlur) {
+            let motion = st.motion_blur.get_or_insert_with(|| MotionBlurStage::new(device));
+            motion.prepare(queue, s, scene.info());
         }
         Ok(current)
     }
@@ -944,10 +959,11 @@ impl Renderer {
         self.stages.composite.hdr()
     }
 
-    /// The image through a pinhole (the composite) when depth of field ran in the last frame
-    /// (`hdr_buffer` then holds the image through the lens), else `None`.
+    /// The composite's image when a pass that reads it ran in the last frame (depth of field,
+    /// motion blur: `hdr_buffer` then holds their result), else `None`.
     pub fn sharp_buffer(&self) -> Option<&wgpu::Buffer> {
-        self.stages.dof.as_ref().filter(|_| self.ran(Effect::Dof)).map(DofStage::sharp)
+        let ran = self.plan.as_ref().is_some_and(|p| p.passes.iter().any(PassId::is_post));
+        self.stages.composite.post().filter(|_| ran).map(|[first, _]| first)
     }
 
     /// The direct radiance of layer 0 in the last frame (`vec4<f32>` per pixel; zero when no

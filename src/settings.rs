@@ -645,6 +645,8 @@ pub struct Settings {
     pub reflections: ReflectionSettings,
     /// Depth of field (runs when the camera's lens has an aperture).
     pub dof: DofSettings,
+    /// Motion blur (runs when the shutter is open and the camera moved since the last frame).
+    pub motion_blur: MotionBlurSettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: Effects,
 }
@@ -665,6 +667,7 @@ impl Default for Settings {
             radiosity: RadiositySettings::default(),
             reflections: ReflectionSettings::default(),
             dof: DofSettings::default(),
+            motion_blur: MotionBlurSettings::default(),
             effects: Effects::default(),
         }
     }
@@ -743,6 +746,9 @@ impl Settings {
         if self.dof.enabled {
             self.dof.validate()?;
         }
+        if self.motion_blur.enabled {
+            self.motion_blur.validate()?;
+        }
         Ok(())
     }
 }
@@ -763,6 +769,8 @@ pub struct Effects {
     pub reflections: bool,
     /// Depth of field (needs a camera lens with an aperture).
     pub dof: bool,
+    /// Motion blur (needs an open shutter and a moving camera).
+    pub motion_blur: bool,
 }
 
 impl Default for Effects {
@@ -774,6 +782,7 @@ impl Default for Effects {
             radiosity: true,
             reflections: true,
             dof: true,
+            motion_blur: true,
         }
     }
 }
@@ -791,6 +800,7 @@ impl Effects {
             radiosity: false,
             reflections: false,
             dof: false,
+            motion_blur: false,
         };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
@@ -800,11 +810,12 @@ impl Effects {
                 "radiosity" => e.radiosity = true,
                 "reflections" => e.reflections = true,
                 "dof" => e.dof = true,
+                "motion_blur" => e.motion_blur = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
                         format!(
-                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections, dof; or auto)"
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections, dof, motion_blur; or auto)"
                         ),
                     ));
                 }
@@ -874,6 +885,62 @@ impl DofSettings {
             return Err(Error::setting(
                 "dof.thickness",
                 format!("{} (must be finite and > 0)", self.thickness),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Motion blur of the camera's motion (`wgsl/motion_blur.wgsl`, documented there): per pixel,
+/// `samples` instants of the shutter, each the nearest surface of either layer whose motion
+/// vector puts it at the pixel then.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionBlurSettings {
+    /// Run the pass (when the shutter is open and the camera moved).
+    pub enabled: bool,
+    /// How long the shutter stays open before each frame's instant, as a fraction of the time
+    /// between frames, in [0, 1] (0, the default: closed, no motion blur).
+    pub shutter: f32,
+    /// Instants of the shutter per pixel. 1 to 256.
+    pub samples: u32,
+    /// The longest streak followed, in pixels; faster motion is followed this far. 1 to 256.
+    pub max_blur: f32,
+    /// Let the pixels see layer 1 where the surface in front has moved off it (the deep
+    /// G-buffer's use here); `false` reads layer 0 only.
+    pub two_layers: bool,
+}
+
+impl Default for MotionBlurSettings {
+    fn default() -> Self {
+        MotionBlurSettings {
+            enabled: true,
+            shutter: 0.0,
+            samples: 16,
+            max_blur: 32.0,
+            two_layers: true,
+        }
+    }
+}
+
+impl MotionBlurSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(0.0..=1.0).contains(&self.shutter) {
+            return Err(Error::setting(
+                "motion_blur.shutter",
+                format!("{} (must be in [0, 1])", self.shutter),
+            ));
+        }
+        if !(1..=256).contains(&self.samples) {
+            return Err(Error::setting(
+                "motion_blur.samples",
+                format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if !(self.max_blur.is_finite() && (1.0..=256.0).contains(&self.max_blur)) {
+            return Err(Error::setting(
+                "motion_blur.max_blur",
+                format!("{} (must be 1 to 256 pixels)", self.max_blur),
             ));
         }
         Ok(())

@@ -40,8 +40,12 @@ fn cornell_runs_everything_it_has() {
     assert_eq!(plan.layers, 2);
     assert_eq!(
         plan.left_out,
-        [(Effect::Reflections, Reason::NotNeeded), (Effect::Dof, Reason::NotNeeded)],
-        "no mirror in the box, and its camera is a pinhole"
+        [
+            (Effect::Reflections, Reason::NotNeeded),
+            (Effect::Dof, Reason::NotNeeded),
+            (Effect::MotionBlur, Reason::NotNeeded)
+        ],
+        "no mirror in the box, its camera is a pinhole, and the shutter is closed"
     );
     assert_eq!(
         plan.passes,

@@ -24,6 +24,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/spiral.wgsl"
 #include "shared/shade.wgsl"
+#include "shared/layer1.wgsl"
 
 // Mirrors `DofUniform` in src/frame/uniforms.rs.
 struct Dof {
@@ -48,17 +49,6 @@ struct Dof {
 @group(0) @binding(4) var<storage, read> direct1: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> sharp: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
-
-// Layer 1's radiance at pixel q, shaded as the composite shades a surface with nothing but its
-// direct light, emission and the ambient term.
-fn layer1_radiance(q: u32) -> vec4<f32> {
-#if PACKED
-    let s = gbuffer_decode(gbuffer1[q * G_WORDS], gbuffer1[q * G_WORDS + 1u]);
-#else
-    let s = gbuffer_decode(gbuffer1[q * G_WORDS], gbuffer1[q * G_WORDS + 1u], gbuffer1[q * G_WORDS + 2u], gbuffer1[q * G_WORDS + 3u]);
-#endif
-    return vec4<f32>(shaded(s, direct1[q].rgb, 1.0, vec4<f32>(0.0), dof.ambient), 1.0);
-}
 
 // Whether a ray now at inverse depth `inv_z` (`inv_prev` a step before) has reached a surface at
 // view depth z (0: none): it is behind it, and either crossed its depth in this step or is no
@@ -100,7 +90,7 @@ fn lens_ray(pixel: vec2<u32>, u: vec2<f32>) -> vec4<f32> {
         if z0 > 0.0 && inv_z < 1.0 / (z0 * (1.0 + dof.thickness)) {
             let z1 = gword_depth(gbuffer1[q * G_WORDS]);
             if reached(inv_prev, inv_z, z1) {
-                return layer1_radiance(q);
+                return layer1_radiance(q, dof.ambient);
             }
         }
 #endif

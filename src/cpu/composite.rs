@@ -18,6 +18,12 @@ pub fn shaded(s: &GSample, direct: Vec3, visibility: f32, irradiance: Vec4, ambi
     direct + reflected + s.emissive
 }
 
+/// As `layer1_radiance` (`wgsl/shared/layer1.wgsl`): layer 1's radiance at a pixel, with its
+/// direct light, emission and the ambient term only (alpha 1).
+pub fn layer1_radiance(s: &GSample, direct: Vec3, ambient: Vec3) -> Vec4 {
+    shaded(s, direct, 1.0, Vec4::ZERO, ambient).extend(1.0)
+}
+
 /// DIRECT + AV * AMBIENT + RADIOSITY + emission per pixel; the sky where there is no surface.
 /// `radiosity` is the irradiance the gather found (rgb) and the share of the hemisphere it
 /// covers (w) per pixel.

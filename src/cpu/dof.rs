@@ -4,7 +4,7 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::cpu::composite::shaded;
+use crate::cpu::composite::layer1_radiance;
 use crate::cpu::spiral::{GOLDEN_TURNS, pixel_hash};
 use crate::frame::DofUniform;
 use crate::gbuffer::GSample;
@@ -68,8 +68,7 @@ impl DofInputs<'_> {
             if self.two_layers && z0 > 0.0 && inv_z < 1.0 / (z0 * (1.0 + d.thickness)) {
                 let s1 = &self.layers[1][q];
                 if self.reached(inv_prev, inv_z, s1.depth) {
-                    let ambient = Vec3::from_array(d.ambient);
-                    return shaded(s1, self.direct1[q], 1.0, Vec4::ZERO, ambient).extend(1.0);
+                    return layer1_radiance(s1, self.direct1[q], Vec3::from_array(d.ambient));
                 }
             }
             inv_prev = inv_z;

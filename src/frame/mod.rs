@@ -21,7 +21,7 @@ pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
     AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform,
-    RadiosityUniform, RasterCounters, ReflectionsUniform,
+    MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform,
 };
 
 /// A `#[repr(C)]` struct's size and field offsets, and the WGSL struct it mirrors.
@@ -71,6 +71,7 @@ pub const MIRRORED: &[MirrorLayout] = &[
     DirectUniform::LAYOUT,
     CompositeUniform::LAYOUT,
     DofUniform::LAYOUT,
+    MotionBlurUniform::LAYOUT,
     LevelUniform::LAYOUT,
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,

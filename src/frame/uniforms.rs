@@ -6,8 +6,8 @@ use bytemuck::{Pod, Zeroable};
 use super::{PyramidLayout, mirrored};
 use crate::scene::{Camera, Projection};
 use crate::settings::{
-    AoSettings, DofSettings, Normalization, RadiosityEstimator, RadiositySettings,
-    ReflectionSettings,
+    AoSettings, DofSettings, MotionBlurSettings, Normalization, RadiosityEstimator,
+    RadiositySettings, ReflectionSettings,
 };
 
 /// Mirrors `struct Ao` in `wgsl/ao.wgsl`.
@@ -280,6 +280,42 @@ pub struct CompositeUniform {
 }
 
 mirrored!(CompositeUniform, "composite.wgsl", "Composite", [ambient]);
+
+/// Mirrors `struct MotionBlur` in `wgsl/motion_blur.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct MotionBlurUniform {
+    /// The ambient radiance (layer 1 is shaded with it).
+    pub ambient: [f32; 3],
+    /// [`MotionBlurSettings::shutter`].
+    pub shutter: f32,
+    /// [`MotionBlurSettings::max_blur`].
+    pub max_blur: f32,
+    /// [`MotionBlurSettings::samples`].
+    pub samples: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+mirrored!(
+    MotionBlurUniform,
+    "motion_blur.wgsl",
+    "MotionBlur",
+    [ambient, shutter, max_blur, samples]
+);
+
+impl MotionBlurUniform {
+    /// The constants for `s` with the scene's `ambient` radiance.
+    pub fn new(s: &MotionBlurSettings, ambient: [f32; 3]) -> Self {
+        MotionBlurUniform {
+            ambient,
+            shutter: s.shutter,
+            max_blur: s.max_blur,
+            samples: s.samples,
+            _pad: [0; 2],
+        }
+    }
+}
 
 /// Mirrors `struct Dof` in `wgsl/dof.wgsl`.
 #[repr(C)]

@@ -6,10 +6,13 @@ use crate::frame::CompositeUniform;
 use crate::gpu::{self, slots::composite as slot};
 use crate::plan::PassId;
 
-/// The HDR image (`vec4<f32>` per pixel) and the composite's constants.
+/// The HDR image (`vec4<f32>` per pixel), the composite's constants, and two more images for
+/// the passes after it (made when a plan first runs one).
 pub(crate) struct CompositeStage {
     uniform: wgpu::Buffer,
     hdr: wgpu::Buffer,
+    post: Option<[wgpu::Buffer; 2]>,
+    pixels: u64,
 }
 
 impl CompositeStage {
@@ -23,7 +26,24 @@ impl CompositeStage {
                 pixels * 16,
                 wgpu::BufferUsages::empty(),
             ),
+            post: None,
+            pixels,
         }
+    }
+
+    /// Makes the images of the passes after the composite, if not made yet.
+    pub(crate) fn make_post(&mut self, device: &wgpu::Device) {
+        let pixels = self.pixels;
+        self.post.get_or_insert_with(|| {
+            ["deep-gbuffer.post.a", "deep-gbuffer.post.b"].map(|label| {
+                gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty())
+            })
+        });
+    }
+
+    /// The images of the passes after the composite, once made.
+    pub(crate) fn post(&self) -> Option<[&wgpu::Buffer; 2]> {
+        self.post.as_ref().map(|[a, b]| [a, b])
     }
 
     /// Writes the frame's constants.
@@ -48,7 +68,7 @@ impl Stage for CompositeStage {
             (slot::COMPOSITE, &self.uniform),
             (slot::GBUFFER, ctx.gbuffer[0]),
             (slot::DIRECT, ctx.direct[0]),
-            (slot::HDR, ctx.sharp.unwrap_or(&self.hdr)),
+            (slot::HDR, ctx.image_io(id).1),
         ];
         let terms = [
             ("AO", slot::AV, ctx.av),

@@ -78,7 +78,8 @@ impl Stage for DirectStage {
         let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
         // Layer 1's direct light feeds the radiosity and the reflections only.
         let plan = ctx.plan;
-        let dof_layer1 = plan.runs(Effect::Dof) && ctx.settings.dof.two_layers;
+        let dof_layer1 = (plan.runs(Effect::Dof) && ctx.settings.dof.two_layers)
+            || (plan.runs(Effect::MotionBlur) && ctx.settings.motion_blur.two_layers);
         let layers = if plan.runs(Effect::Radiosity) || plan.runs(Effect::Reflections) || dof_layer1
         {
             2

@@ -7,24 +7,15 @@ use crate::plan::PassId;
 use crate::scene::{Camera, SceneInfo};
 use crate::settings::Settings;
 
-/// The depth of field: its constants and the sharp image the composite writes for it.
+/// The depth of field: its constants.
 pub(crate) struct DofStage {
     uniform: wgpu::Buffer,
-    sharp: wgpu::Buffer,
 }
 
 impl DofStage {
-    /// The stage for a `pixels`-pixel frame.
-    pub(crate) fn new(device: &wgpu::Device, pixels: u64) -> Self {
-        DofStage {
-            uniform: gpu::uniform_buffer_for::<DofUniform>(device, "deep-gbuffer.dof"),
-            sharp: gpu::storage_buffer(
-                device,
-                "deep-gbuffer.dof.sharp",
-                pixels * 16,
-                wgpu::BufferUsages::empty(),
-            ),
-        }
+    /// The stage.
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        DofStage { uniform: gpu::uniform_buffer_for::<DofUniform>(device, "deep-gbuffer.dof") }
     }
 
     /// Writes the frame's constants for `camera` and `scene`.
@@ -39,11 +30,6 @@ impl DofStage {
         let uniform = DofUniform::new(&s.dof, camera, s.height, scene.bounds, ambient);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
-
-    /// The image through a pinhole, as the composite writes it (`vec4<f32>` per pixel).
-    pub(crate) fn sharp(&self) -> &wgpu::Buffer {
-        &self.sharp
-    }
 }
 
 impl Stage for DofStage {
@@ -55,14 +41,17 @@ impl Stage for DofStage {
             defines.push("TWO_LAYERS");
         }
         let pipeline = ctx.pipelines.get(ctx.device, "dof", "dof_main", &defines, &[]);
+        let (Some(sharp), hdr) = ctx.image_io(id) else {
+            unreachable!("a post pass reads an image");
+        };
         let entries = [
             (slot::FRAME, ctx.frame),
             (slot::DOF, &self.uniform),
             (slot::GBUFFER0, ctx.gbuffer[0]),
             (slot::GBUFFER1, ctx.gbuffer[1]),
             (slot::DIRECT1, ctx.direct[1]),
-            (slot::SHARP, &self.sharp),
-            (slot::HDR, ctx.hdr),
+            (slot::SHARP, sharp),
+            (slot::HDR, hdr),
         ];
         pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
     }

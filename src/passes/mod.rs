@@ -15,6 +15,7 @@ pub(crate) mod composite;
 pub(crate) mod direct;
 pub(crate) mod dof;
 pub(crate) mod fill;
+pub(crate) mod motion_blur;
 pub(crate) mod present;
 pub(crate) mod pyramid;
 pub(crate) mod radiosity;
@@ -103,15 +104,33 @@ pub(crate) struct FrameContext<'a> {
     pub environment: Option<&'a wgpu::Buffer>,
     /// The HDR image the frame ends in.
     pub hdr: &'a wgpu::Buffer,
-    /// Where the composite writes when depth of field runs after it (it then writes `hdr`);
-    /// `None`: the composite writes `hdr`.
-    pub sharp: Option<&'a wgpu::Buffer>,
+    /// Two images of the HDR image's size for the passes after the composite (depth of field,
+    /// motion blur), when the plan runs one.
+    pub post: Option<[&'a wgpu::Buffer; 2]>,
 }
 
-impl FrameContext<'_> {
+impl<'a> FrameContext<'a> {
     /// The image size.
     pub(crate) fn size(&self) -> (u32, u32) {
         (self.settings.width, self.settings.height)
+    }
+
+    /// The image `pass` reads (`None` for the composite, which makes one) and the one it writes:
+    /// the composite writes the HDR image, or the first post pass's input when the plan runs
+    /// post passes ([`PassId::is_post`]); each post pass reads the one before's output, and the
+    /// last writes the HDR image.
+    pub(crate) fn image_io(&self, pass: &PassId) -> (Option<&'a wgpu::Buffer>, &'a wgpu::Buffer) {
+        let posts: Vec<&PassId> = self.plan.passes.iter().filter(|p| p.is_post()).collect();
+        let Some(spare) = self.post.filter(|_| !posts.is_empty()) else {
+            return (None, self.hdr);
+        };
+        match posts.iter().position(|p| *p == pass) {
+            None => (None, spare[0]),
+            Some(i) => {
+                let output = if i + 1 == posts.len() { self.hdr } else { spare[(i + 1) % 2] };
+                (Some(spare[i % 2]), output)
+            }
+        }
     }
 }
 

@@ -103,6 +103,24 @@ impl Shot<'_> {
     }
 }
 
+/// The ray of pixel position `px` through `camera` (whose matrices `f` holds): from the eye along
+/// the pinhole ray, or, through a lens with an aperture, from a point of the lens disc (uniform
+/// over its area, drawn from `rng`) through the pinhole ray's point at the focus depth.
+fn camera_ray(f: &FrameUniform, camera: &Camera, px: Vec2, rng: &mut ChaCha8Rng) -> (Vec3, Vec3) {
+    let to_world = |v: Vec3, w: f32| mat_mul(&f.inv_view, v.extend(w).to_array()).xyz();
+    let near = view_position(f, px, 0.0);
+    let lens = camera.lens;
+    if !lens.blurs() {
+        let dir = to_world(view_position(f, px, 1.0) - near, 0.0).normalize();
+        return (to_world(near, 1.0), dir);
+    }
+    let focus = to_world(view_position(f, px, lens.focus), 1.0);
+    let (u1, u2): (f32, f32) = (rng.random(), rng.random());
+    let (r, phi) = (lens.radius * u1.sqrt(), 2.0 * PI * u2);
+    let origin = to_world(Vec3::new(r * phi.cos(), r * phi.sin(), 0.0), 1.0);
+    (origin, (focus - origin).normalize())
+}
+
 /// A point on the unit hemisphere around `n`, cosine distributed, from two uniform numbers.
 fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
@@ -209,7 +227,7 @@ impl Tracer {
         let spp = shot.spp;
         let r2 = ao.radius * ao.radius;
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, _, rng| {
             let origin = point + s.normal * eps;
             let (mean, se) = sample_mean(spp, || {
                 let u = Vec2::new(rng.random(), rng.random());
@@ -477,7 +495,7 @@ impl Tracer {
         let spp = shot.spp;
         let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, _, rng| {
             Some(sample_mean(spp, || {
                 let mut radiance = Vec3::ZERO;
                 let mut throughput = Vec3::ONE;
@@ -527,7 +545,7 @@ impl Tracer {
         let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
         let eps = 1e-5 * self.scale;
-        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, _, rng| {
             if s.reflectivity <= 0.0 {
                 return None;
             }
@@ -561,33 +579,63 @@ impl Tracer {
         bounces: u32,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
+        self.full_in_motion(scene, shot, None, environment, bounces, progress)
+    }
+
+    /// [`full`](Tracer::full) over an open shutter: `motion` is the camera of the frame before
+    /// and the share of the time between the frames the shutter stays open up to the shot's
+    /// instant. Each sample is taken at an instant spread uniformly over that time, through the
+    /// camera moved linearly (eye, target and up) from the one before to the shot's: the image
+    /// the motion-blur pass estimates (on the pixels whose ray at the shot's instant meets a
+    /// surface).
+    pub fn full_in_motion(
+        &self,
+        scene: &Scene,
+        shot: &Shot,
+        motion: Option<(&Camera, f32)>,
+        environment: Option<&Environment>,
+        bounces: u32,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<TruthImage> {
         let f = shot.frame()?;
+        if let Some((before, shutter)) = motion {
+            before.validate()?;
+            if !(0.0..=1.0).contains(&shutter) {
+                return Err(Error::setting("shutter", format!("{shutter} (must be in [0, 1])")));
+            }
+        }
         let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
-        let lens = shot.camera.lens;
-        let to_world = |v: [f32; 4]| mat_mul(&f.inv_view, v).xyz();
-        let (eye, right, up) = (
-            to_world([0.0, 0.0, 0.0, 1.0]),
-            to_world([1.0, 0.0, 0.0, 0.0]),
-            to_world([0.0, 1.0, 0.0, 0.0]),
-        );
-        self.per_pixel(&f, scene, shot.seed, progress, |s, point, rng| {
-            if lens.blurs() {
-                // The pinhole ray's point at the focus depth (view space scales along the ray).
-                let view = mat_mul(&f.view, point.extend(1.0).to_array()).xyz();
-                let focus = to_world((view * (lens.focus / -view.z)).extend(1.0).to_array());
+        let camera = shot.camera;
+        let (w, h) = shot.size;
+        self.per_pixel(&f, scene, shot.seed, progress, |s, point, (x, y), rng| {
+            if motion.is_none() && !camera.lens.blurs() {
+                let surface = Surface::of(s);
+                let v = towards_eye(&f, point);
                 return Some(sample_mean(spp, || {
-                    let (u1, u2): (f32, f32) = (rng.random(), rng.random());
-                    let (r, phi) = (lens.radius * u1.sqrt(), 2.0 * PI * u2);
-                    let origin = eye + right * (r * phi.cos()) + up * (r * phi.sin());
-                    let w = (focus - origin).normalize();
-                    self.radiance(scene, &lighting, origin, w, bounces, rng)
+                    self.outgoing(scene, &lighting, &surface, point, v, bounces, rng)
                 }));
             }
-            let surface = Surface::of(s);
-            let v = towards_eye(&f, point);
+            let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             Some(sample_mean(spp, || {
-                self.outgoing(scene, &lighting, &surface, point, v, bounces, rng)
+                // The camera at this sample's instant (the shot's own without motion).
+                let moved;
+                let (at, frame) = match motion {
+                    Some((before, shutter)) => {
+                        let t = 1.0 - shutter * rng.random::<f32>();
+                        moved = Camera {
+                            eye: before.eye.lerp(camera.eye, t),
+                            target: before.target.lerp(camera.target, t),
+                            up: before.up.lerp(camera.up, t),
+                            ..camera.clone()
+                        };
+                        let m = CameraMatrices::new(&moved, w, h);
+                        (&moved, FrameUniform::new(&moved, m, m, w, h, 0.0, (0, 0, 0)))
+                    }
+                    None => (camera, f),
+                };
+                let (origin, dir) = camera_ray(&frame, at, px, rng);
+                self.radiance(scene, &lighting, origin, dir, bounces, rng)
             }))
         })
     }
@@ -600,7 +648,8 @@ impl Tracer {
         }
     }
 
-    /// Runs `estimate(layer-0 sample, its world point, its sample stream)` for every pixel in
+    /// Runs `estimate(layer-0 sample, its world point, its pixel, its sample stream)` for every
+    /// pixel in
     /// parallel and gathers mean and standard error (`None`: the effect has no value there, and
     /// the pixel counts as not visible).
     fn per_pixel(
@@ -609,7 +658,7 @@ impl Tracer {
         scene: &Scene,
         seed: u64,
         progress: &(dyn Fn() + Sync),
-        estimate: impl Fn(&GSample, Vec3, &mut ChaCha8Rng) -> Option<(Vec3, Vec3)> + Sync,
+        estimate: impl Fn(&GSample, Vec3, (u32, u32), &mut ChaCha8Rng) -> Option<(Vec3, Vec3)> + Sync,
     ) -> Result<TruthImage> {
         let (width, height) = (f.width, f.height);
         let rows: Vec<Vec<(Vec3, Vec3, bool)>> = (0..height)
@@ -630,7 +679,7 @@ impl Tracer {
                         // each estimator adds cannot do this (it runs parallel to that surface).
                         let point = point + towards_eye(f, point) * (PULL_BACK * self.scale);
                         let mut rng = pixel_rng(seed, x, y, width);
-                        match estimate(&s, point, &mut rng) {
+                        match estimate(&s, point, (x, y), &mut rng) {
                             Some((mean, se)) => (mean, se, true),
                             None => (Vec3::ZERO, Vec3::ZERO, false),
                         }

@@ -1,0 +1,111 @@
+// Motion blur of the camera's motion, from both layers of the deep G-buffer.
+//
+// The shutter is open for `shutter` of the time between frames, up to each frame's instant. A
+// surface point whose pixel is q now, with motion vector m(q) (its pixel now minus its pixel in
+// the last frame, as the resolve writes it for each layer), stood a fraction s of a frame
+// earlier at q - s m(q) (moving linearly between frames). For each of `samples` instants
+// s_i = shutter (i + j) / samples (j: a per-pixel offset in [0, 1)) the kernel looks for the
+// surfaces that stood at pixel p then: it walks from p along p's own motion, one pixel a step,
+// out to max_blur s_i / shutter pixels (the longest streak followed over the whole shutter),
+// and at each pixel q takes layer 0, and layer 1 (TWO_LAYERS), when its point stood within
+// three quarters of a pixel of p's centre at s_i; the nearest of those is what p showed then.
+// Layer 1 is where the pass needs the deep G-buffer: where a surface in front has moved on, p
+// showed what it now hides. The pixel takes the mean over the instants: layer 0's radiance from
+// the image before this pass (`image`), layer 1's shaded with its direct light, emission and the
+// ambient term (shared/layer1.wgsl); an instant that finds nothing keeps p's own value.
+// Surfaces moving against p's motion are not followed. src/cpu/motion_blur.rs is the same on
+// the CPU.
+// defines: PACKED TWO_LAYERS
+
+#include "shared/frame.wgsl"
+#include "shared/gbuffer.wgsl"
+#include "shared/spiral.wgsl"
+#include "shared/shade.wgsl"
+#include "shared/layer1.wgsl"
+
+// Mirrors `MotionBlurUniform` in src/frame/uniforms.rs.
+struct MotionBlur {
+    ambient: vec3<f32>,
+    shutter: f32,
+    max_blur: f32,
+    samples: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> motion: MotionBlur;
+@group(0) @binding(2) var<storage, read> gbuffer0: array<GWord>;
+@group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
+@group(0) @binding(4) var<storage, read> direct1: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> image: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
+
+fn sample0(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u], gbuffer0[p * G_WORDS + 2u], gbuffer0[p * G_WORDS + 3u]);
+#endif
+}
+
+fn sample1(p: u32) -> GSample {
+#if PACKED
+    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u]);
+#else
+    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u], gbuffer1[p * G_WORDS + 2u], gbuffer1[p * G_WORDS + 3u]);
+#endif
+}
+
+// Whether a point now at the centre of pixel `q` with motion `m` stood within three quarters of
+// a pixel of `centre` a fraction `s` of a frame earlier.
+fn stood_at(q: vec2<f32>, m: vec2<f32>, s: f32, centre: vec2<f32>) -> bool {
+    let d = abs(q + 0.5 - s * m - centre);
+    return max(d.x, d.y) <= 0.75;
+}
+
+@compute @workgroup_size(8, 8)
+fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let p = gid.y * frame.width + gid.x;
+    let own = sample0(p);
+    let speed = length(own.motion);
+    if !(own.depth > 0.0) || !(speed * motion.shutter >= 0.5) {
+        // Nothing here moved half a pixel while the shutter was open.
+        hdr[p] = image[p];
+        return;
+    }
+    let dir = own.motion / speed;
+    let centre = vec2<f32>(gid.xy) + 0.5;
+    let jitter = f32(pixel_hash(gid.xy) >> 20u) / 4096.0;
+    var sum = vec4<f32>(0.0);
+    for (var i = 0u; i < motion.samples; i++) {
+        let s = motion.shutter * (f32(i) + jitter) / f32(motion.samples);
+        let reach = u32(motion.max_blur * s / motion.shutter);
+        var best = image[p];
+        var nearest = 3.0e38;
+        for (var k = 0u; k <= reach; k++) {
+            let at = floor(centre + f32(k) * dir);
+            if any(at < vec2<f32>(0.0)) || at.x >= f32(frame.width) || at.y >= f32(frame.height) {
+                break;
+            }
+            let q = u32(at.y) * frame.width + u32(at.x);
+            let s0 = sample0(q);
+            if s0.depth > 0.0 && s0.depth < nearest && stood_at(at, s0.motion, s, centre) {
+                nearest = s0.depth;
+                best = image[q];
+            }
+#if TWO_LAYERS
+            let s1 = sample1(q);
+            if s1.depth > 0.0 && s1.depth < nearest && stood_at(at, s1.motion, s, centre) {
+                nearest = s1.depth;
+                best = layer1_radiance(q, motion.ambient);
+            }
+#endif
+        }
+        sum += best;
+    }
+    hdr[p] = sum / f32(motion.samples);
+}
