@@ -41,20 +41,18 @@ struct MotionBlur {
 @group(0) @binding(5) var<storage, read> image: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
 
-fn sample0(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u], gbuffer0[p * G_WORDS + 2u], gbuffer0[p * G_WORDS + 3u]);
-#endif
-}
-
-fn sample1(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer1[p * G_WORDS], gbuffer1[p * G_WORDS + 1u], gbuffer1[p * G_WORDS + 2u], gbuffer1[p * G_WORDS + 3u]);
-#endif
+// The view depth (0: no surface) and the motion of layer 0 (`layer1` false) or 1 at pixel p.
+fn depth_motion(p: u32, layer1: bool) -> vec3<f32> {
+    var w0: GWord;
+    var wm: GWord;
+    if layer1 {
+        w0 = gbuffer1[p * G_WORDS];
+        wm = gbuffer1[p * G_WORDS + G_MOTION_WORD];
+    } else {
+        w0 = gbuffer0[p * G_WORDS];
+        wm = gbuffer0[p * G_WORDS + G_MOTION_WORD];
+    }
+    return vec3<f32>(gword_depth(w0), gword_motion(wm));
 }
 
 // Whether a point now at the centre of pixel `q` with motion `m` stood within three quarters of
@@ -70,14 +68,14 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = gid.y * frame.width + gid.x;
-    let own = sample0(p);
-    let speed = length(own.motion);
-    if !(own.depth > 0.0) || !(speed * motion.shutter >= 0.5) {
+    let own = depth_motion(p, false);
+    let speed = length(own.yz);
+    if !(own.x > 0.0) || !(speed * motion.shutter >= 0.5) {
         // Nothing here moved half a pixel while the shutter was open.
         hdr[p] = image[p];
         return;
     }
-    let dir = own.motion / speed;
+    let dir = own.yz / speed;
     let centre = vec2<f32>(gid.xy) + 0.5;
     let jitter = f32(pixel_hash(gid.xy) >> 20u) / 4096.0;
     var sum = vec4<f32>(0.0);
@@ -92,15 +90,15 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 break;
             }
             let q = u32(at.y) * frame.width + u32(at.x);
-            let s0 = sample0(q);
-            if s0.depth > 0.0 && s0.depth < nearest && stood_at(at, s0.motion, s, centre) {
-                nearest = s0.depth;
+            let s0 = depth_motion(q, false);
+            if s0.x > 0.0 && s0.x < nearest && stood_at(at, s0.yz, s, centre) {
+                nearest = s0.x;
                 best = image[q];
             }
 #if TWO_LAYERS
-            let s1 = sample1(q);
-            if s1.depth > 0.0 && s1.depth < nearest && stood_at(at, s1.motion, s, centre) {
-                nearest = s1.depth;
+            let s1 = depth_motion(q, true);
+            if s1.x > 0.0 && s1.x < nearest && stood_at(at, s1.yz, s, centre) {
+                nearest = s1.x;
                 best = layer1_radiance(q, motion.ambient);
             }
 #endif

@@ -108,6 +108,13 @@ fn gword_normal(w0: GWord) -> vec3<f32> {
     return select(vec3<f32>(0.0), oct_decode(unpack2x16snorm(w0.y)), bitcast<f32>(w0.x) > 0.0);
 }
 
+// The word of a sample that holds its motion, and the motion it holds.
+const G_MOTION_WORD: u32 = 1u;
+
+fn gword_motion(w: GWord) -> vec2<f32> {
+    return unpack_half2(w.y);
+}
+
 fn gbuffer_decode(w0: vec4<u32>, w1: vec4<u32>) -> GSample {
     var s: GSample;
     s.depth = bitcast<f32>(w0.x);
@@ -157,6 +164,13 @@ fn gword_depth(w0: GWord) -> f32 {
 // The world-space normal held by a sample's first word.
 fn gword_normal(w0: GWord) -> vec3<f32> {
     return w0.yzw;
+}
+
+// The word of a sample that holds its motion, and the motion it holds.
+const G_MOTION_WORD: u32 = 3u;
+
+fn gword_motion(w: GWord) -> vec2<f32> {
+    return w.xy;
 }
 
 fn gbuffer_decode(w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>) -> GSample {
