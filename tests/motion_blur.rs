@@ -261,3 +261,23 @@ fn the_lens_then_the_shutter() {
     // Each pass may move a few pixels by a step (2% each, as above); chained, twice that.
     assert_few_differ(&out, &expected, 0.04, far, "the lens then the shutter against the CPU's");
 }
+
+/// A camera that turns half around between frames (motion vectors of thousands of pixels, or
+/// none where the last frame saw nothing) gives a finite image within the scene's radiance.
+#[test]
+fn a_camera_turning_half_around_stays_finite() {
+    let mut scene = Scene::default();
+    quad(&mut scene, 6.0, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    quad(&mut scene, 2.0, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
+    let camera = camera_at(0.0);
+    for turn in [170.0, 90.0, 45.0, 1e-3] {
+        let cameras = [camera.orbited(turn), camera.clone()];
+        let r = render_frames(&scene, &cameras, settings(24, 16, open(1.0)));
+        for v in read4(&r.renderer, r.renderer.hdr_buffer()) {
+            assert!(
+                v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
+                "{turn}: {v}"
+            );
+        }
+    }
+}
