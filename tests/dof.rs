@@ -3,11 +3,12 @@
 
 mod common;
 
-use common::{assert_few_differ, gpu, read4, render};
+use common::{
+    PostInputs, assert_few_differ, emissive_quad, gpu, middle_rmse, post_inputs, read4, render,
+};
 use deep_gbuffer::cpu::dof::DofInputs;
 use deep_gbuffer::frame::DofUniform;
 use deep_gbuffer::plan::{Effect, PassId};
-use deep_gbuffer::scene::{Material, MeshData};
 use deep_gbuffer::truth::{Shot, Tracer};
 use deep_gbuffer::{Camera, DofSettings, Lens, Scene, Settings};
 use glam::{Vec3, Vec4};
@@ -23,27 +24,6 @@ fn lens_camera(radius: f32, focus: f32) -> Camera {
     camera
 }
 
-/// An emissive quad facing the camera at view depth `z`, spanning x in `xs` and y in [-5, 5].
-fn quad(scene: &mut Scene, z: f32, xs: (f32, f32), emissive: Vec3) {
-    let material = scene.materials.len() as u32;
-    scene.materials.push(Material { emissive, base_color: Vec4::ZERO, ..Default::default() });
-    let positions = [
-        Vec3::new(xs.0, -5.0, -z),
-        Vec3::new(xs.1, -5.0, -z),
-        Vec3::new(xs.1, 5.0, -z),
-        Vec3::new(xs.0, 5.0, -z),
-    ];
-    let indices = [0, 1, 2, 0, 2, 3];
-    scene
-        .push_mesh(MeshData {
-            positions: &positions,
-            indices: &indices,
-            material,
-            ..Default::default()
-        })
-        .unwrap();
-}
-
 /// Reads the final and the sharp image and computes the CPU reference from the GPU's own
 /// G-buffer, direct light and sharp image.
 fn against_cpu(scene: &Scene, camera: &Camera, s: Settings) -> (Vec<Vec4>, Vec<Vec4>) {
@@ -53,16 +33,7 @@ fn against_cpu(scene: &Scene, camera: &Camera, s: Settings) -> (Vec<Vec4>, Vec<V
     let g = gpu();
     let plan = r.renderer.last_plan().unwrap().clone();
     assert!(plan.contains(&PassId::Dof), "{plan}");
-    let sharp = read4(&r.renderer, r.renderer.sharp_buffer().expect("depth of field ran"));
-    let out = read4(&r.renderer, r.renderer.hdr_buffer());
-    let layers = [0, 1].map(|l| {
-        if l < plan.layers as usize {
-            r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples
-        } else {
-            vec![Default::default(); (w * h) as usize]
-        }
-    });
-    let direct1 = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer()).unwrap();
+    let PostInputs { layers, direct1, sharp, out } = post_inputs(&r.renderer);
     let info = deep_gbuffer::SceneBuffers::upload(&g.device, scene).unwrap().info().clone();
     let u = DofUniform::new(&dof, camera, h, info.bounds, info.ambient.to_array());
     let inputs = DofInputs {
@@ -121,7 +92,7 @@ fn a_pinhole_runs_no_lens_pass() {
 #[test]
 fn the_focus_plane_stays_sharp() {
     let mut scene = Scene::default();
-    quad(&mut scene, 4.0, (-5.0, 5.0), Vec3::new(0.2, 0.7, 0.3));
+    emissive_quad(&mut scene, 4.0, (-5.0, 5.0), Vec3::new(0.2, 0.7, 0.3));
     let (sharp, out) =
         against_cpu(&scene, &lens_camera(0.2, 4.0), settings(48, 32, DofSettings::default()));
     for (p, (a, b)) in sharp.iter().zip(&out).enumerate() {
@@ -139,8 +110,8 @@ fn the_focus_plane_stays_sharp() {
 fn a_blurred_edge_spreads_over_its_circle_of_confusion() {
     let (near, focus) = (2.0, 6.0);
     let mut scene = Scene::default();
-    quad(&mut scene, focus, (-20.0, 20.0), Vec3::new(0.0, 1.0, 0.0));
-    quad(&mut scene, near, (-10.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+    emissive_quad(&mut scene, focus, (-20.0, 20.0), Vec3::new(0.0, 1.0, 0.0));
+    emissive_quad(&mut scene, near, (-10.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
     let (w, h) = (96, 64);
     let camera = lens_camera(0.5, focus);
     let s = settings(w, h, DofSettings { samples: 64, ..Default::default() });
@@ -175,8 +146,8 @@ fn a_blurred_edge_spreads_over_its_circle_of_confusion() {
 fn the_second_layer_lowers_the_error_around_a_blurred_foreground() {
     let (near, focus) = (2.0, 6.0);
     let mut scene = Scene::default();
-    quad(&mut scene, focus, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
-    quad(&mut scene, near, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
+    emissive_quad(&mut scene, focus, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    emissive_quad(&mut scene, near, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
     let (w, h) = (96, 64);
     let camera = lens_camera(0.5, focus);
     let tracer = Tracer::new(&scene).unwrap();
@@ -188,15 +159,7 @@ fn the_second_layer_lowers_the_error_around_a_blurred_foreground() {
         let r = render(&scene, &camera, settings(w, h, dof));
         let out = read4(&r.renderer, r.renderer.hdr_buffer());
         // The columns within the bar's circle of confusion of either edge.
-        let band = |x: u32| (x as f32 - w as f32 / 2.0).abs() < 32.0;
-        let (mut sum, mut n) = (0.0f64, 0usize);
-        for (p, (o, t)) in out.iter().zip(&truth.value).enumerate() {
-            if truth.visible[p] && band(p as u32 % w) {
-                sum += f64::from((o.truncate() - *t).length_squared());
-                n += 1;
-            }
-        }
-        errors.push((sum / n as f64).sqrt());
+        errors.push(middle_rmse(&out, &truth, w, 32.0));
     }
     eprintln!("RMSE around the bar: one layer {:.4}, two layers {:.4}", errors[0], errors[1]);
     assert!(errors[1] < 0.8 * errors[0], "two layers {} against one {}", errors[1], errors[0]);
@@ -207,8 +170,8 @@ fn the_second_layer_lowers_the_error_around_a_blurred_foreground() {
 #[test]
 fn lenses_at_their_limits_stay_finite() {
     let mut scene = Scene::default();
-    quad(&mut scene, 6.0, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
-    quad(&mut scene, 2.0, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
+    emissive_quad(&mut scene, 6.0, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    emissive_quad(&mut scene, 2.0, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
     for (radius, focus) in [(1000.0, 6.0), (1e-6, 6.0), (0.5, 0.05), (0.5, 1e9), (3.0, 1e-3)] {
         let r =
             render(&scene, &lens_camera(radius, focus), settings(24, 16, DofSettings::default()));

@@ -3,11 +3,13 @@
 
 mod common;
 
-use common::{assert_few_differ, gpu, read4, render_frames};
+use common::{
+    PostInputs, assert_few_differ, emissive_quad, gpu, middle_rmse, post_inputs, read4,
+    render_frames,
+};
 use deep_gbuffer::cpu::motion_blur::MotionBlurInputs;
 use deep_gbuffer::frame::MotionBlurUniform;
 use deep_gbuffer::plan::{Effect, PassId, Reason};
-use deep_gbuffer::scene::{Material, MeshData};
 use deep_gbuffer::truth::{Shot, Tracer};
 use deep_gbuffer::{Camera, MotionBlurSettings, Scene, Settings};
 use glam::{Vec3, Vec4};
@@ -25,22 +27,6 @@ fn camera_at(x: f32) -> Camera {
     Camera::perspective(Vec3::new(x, 0.0, 0.0), Vec3::new(x, 0.0, -1.0), 40.0, 0.05)
 }
 
-/// An emissive quad facing the camera at view depth `z`, spanning x in `xs` and y in [-5, 5].
-fn quad(scene: &mut Scene, z: f32, xs: (f32, f32), emissive: Vec3) {
-    let material = scene.materials.len() as u32;
-    scene.materials.push(Material { emissive, base_color: Vec4::ZERO, ..Default::default() });
-    let positions = [
-        Vec3::new(xs.0, -5.0, -z),
-        Vec3::new(xs.1, -5.0, -z),
-        Vec3::new(xs.1, 5.0, -z),
-        Vec3::new(xs.0, 5.0, -z),
-    ];
-    let indices = [0, 1, 2, 0, 2, 3];
-    let mesh =
-        MeshData { positions: &positions, indices: &indices, material, ..Default::default() };
-    scene.push_mesh(mesh).unwrap();
-}
-
 /// Renders `cameras` in turn and checks the last frame's motion blur against the CPU's, from
 /// the GPU's own G-buffer, direct light and image before the pass. Returns that image and the
 /// blurred one.
@@ -48,19 +34,9 @@ fn against_cpu(scene: &Scene, cameras: &[Camera], s: Settings) -> (Vec<Vec4>, Ve
     let (w, h) = (s.width, s.height);
     let motion = s.motion_blur.clone();
     let r = render_frames(scene, cameras, s);
-    let g = gpu();
     let plan = r.renderer.last_plan().unwrap().clone();
     assert!(plan.contains(&PassId::MotionBlur), "{plan}");
-    let image = read4(&r.renderer, r.renderer.sharp_buffer().expect("motion blur ran"));
-    let out = read4(&r.renderer, r.renderer.hdr_buffer());
-    let layers = [0, 1].map(|l| {
-        if l < plan.layers as usize {
-            r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples
-        } else {
-            vec![Default::default(); (w * h) as usize]
-        }
-    });
-    let direct1 = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer()).unwrap();
+    let PostInputs { layers, direct1, sharp: image, out } = post_inputs(&r.renderer);
     let u = MotionBlurUniform::new(&motion, scene.ambient.to_array());
     let inputs = MotionBlurInputs {
         u: &u,
@@ -126,8 +102,8 @@ fn a_still_camera_runs_no_motion_pass() {
 fn a_panned_edge_streaks_over_its_motion() {
     let z = 4.0;
     let mut scene = Scene::default();
-    quad(&mut scene, z, (-20.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
-    quad(&mut scene, z, (0.0, 20.0), Vec3::new(0.0, 1.0, 0.0));
+    emissive_quad(&mut scene, z, (-20.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+    emissive_quad(&mut scene, z, (0.0, 20.0), Vec3::new(0.0, 1.0, 0.0));
     let (w, h, shutter, step) = (96, 64, 0.75, 0.3);
     let cameras = [camera_at(-step), camera_at(0.0)];
     let motion = MotionBlurSettings { samples: 64, ..open(shutter) };
@@ -165,8 +141,8 @@ fn a_panned_edge_streaks_over_its_motion() {
 fn the_second_layer_lowers_the_error_behind_a_moving_bar() {
     let (near, far) = (2.0, 6.0);
     let mut scene = Scene::default();
-    quad(&mut scene, far, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
-    quad(&mut scene, near, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
+    emissive_quad(&mut scene, far, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    emissive_quad(&mut scene, near, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
     let (w, h, shutter) = (96, 64, 1.0);
     let cameras = [camera_at(-0.25), camera_at(0.0)];
     let tracer = Tracer::new(&scene).unwrap();
@@ -179,15 +155,7 @@ fn the_second_layer_lowers_the_error_behind_a_moving_bar() {
         let motion = MotionBlurSettings { two_layers, samples: 64, ..open(shutter) };
         let r = render_frames(&scene, &cameras, settings(w, h, motion));
         let out = read4(&r.renderer, r.renderer.hdr_buffer());
-        let band = |x: u32| (x as f32 - w as f32 / 2.0).abs() < 30.0;
-        let (mut sum, mut n) = (0.0f64, 0usize);
-        for (p, (o, t)) in out.iter().zip(&truth.value).enumerate() {
-            if truth.visible[p] && band(p as u32 % w) {
-                sum += f64::from((o.truncate() - *t).length_squared());
-                n += 1;
-            }
-        }
-        errors.push((sum / n as f64).sqrt());
+        errors.push(middle_rmse(&out, &truth, w, 30.0));
     }
     eprintln!("RMSE around the bar: one layer {:.4}, two layers {:.4}", errors[0], errors[1]);
     assert!(errors[1] < 0.8 * errors[0], "two layers {} against one {}", errors[1], errors[0]);
@@ -230,10 +198,7 @@ fn the_lens_then_the_shutter() {
     let plan = r.renderer.last_plan().unwrap().clone();
     let posts: Vec<&PassId> = plan.passes.iter().filter(|p| p.is_post()).collect();
     assert_eq!(posts, [&PassId::Dof, &PassId::MotionBlur]);
-    let sharp = read4(&r.renderer, r.renderer.sharp_buffer().unwrap());
-    let out = read4(&r.renderer, r.renderer.hdr_buffer());
-    let layers = [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
-    let direct1 = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer()).unwrap();
+    let PostInputs { layers, direct1, sharp, out } = post_inputs(&r.renderer);
     let info = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap().info().clone();
     let ambient = info.ambient.to_array();
     let du = DofUniform::new(&dof, &camera, h, info.bounds, ambient);
@@ -267,8 +232,8 @@ fn the_lens_then_the_shutter() {
 #[test]
 fn a_camera_turning_half_around_stays_finite() {
     let mut scene = Scene::default();
-    quad(&mut scene, 6.0, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
-    quad(&mut scene, 2.0, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
+    emissive_quad(&mut scene, 6.0, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    emissive_quad(&mut scene, 2.0, (-0.3, 0.3), Vec3::new(1.0, 0.2, 0.1));
     let camera = camera_at(0.0);
     for turn in [170.0, 90.0, 45.0, 1e-3] {
         let cameras = [camera.orbited(turn), camera.clone()];

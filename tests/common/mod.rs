@@ -218,3 +218,77 @@ pub fn corner_obscurance(x: f32, r: f32) -> f32 {
     let o = std::f64::consts::FRAC_2_PI * (a / 2.0 - (2.0 * a).sin() / 4.0 - u * u * (a.tan() - a));
     o as f32
 }
+
+/// Adds an emissive quad (nothing else: base colour 0) facing a camera that looks down -z, at
+/// view depth `z`, spanning x in `xs` and y in [-5, 5].
+pub fn emissive_quad(scene: &mut Scene, z: f32, xs: (f32, f32), emissive: Vec3) {
+    let material = scene.materials.len() as u32;
+    scene.materials.push(deep_gbuffer::scene::Material {
+        emissive,
+        base_color: glam::Vec4::ZERO,
+        ..Default::default()
+    });
+    let positions = [
+        Vec3::new(xs.0, -5.0, -z),
+        Vec3::new(xs.1, -5.0, -z),
+        Vec3::new(xs.1, 5.0, -z),
+        Vec3::new(xs.0, 5.0, -z),
+    ];
+    let indices = [0, 1, 2, 0, 2, 3];
+    let mesh = deep_gbuffer::scene::MeshData {
+        positions: &positions,
+        indices: &indices,
+        material,
+        ..Default::default()
+    };
+    scene.push_mesh(mesh).expect("indices in range");
+}
+
+/// The RMSE of `image` against `truth` over the visible pixels of the columns within
+/// `half_width` of the middle (`width` pixels a row).
+pub fn middle_rmse(
+    image: &[glam::Vec4],
+    truth: &deep_gbuffer::truth::TruthImage,
+    width: u32,
+    half_width: f32,
+) -> f64 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (p, (o, t)) in image.iter().zip(&truth.value).enumerate() {
+        let x = (p as u32 % width) as f32;
+        if truth.visible[p] && (x - width as f32 / 2.0).abs() < half_width {
+            sum += f64::from((o.truncate() - *t).length_squared());
+            n += 1;
+        }
+    }
+    (sum / n as f64).sqrt()
+}
+
+/// What a pass after the composite reads, from a renderer's last frame: both layers' samples
+/// (layer 1 empty when it was not drawn), layer 1's direct radiance, the composite's image and
+/// the final one.
+pub struct PostInputs {
+    pub layers: [Vec<deep_gbuffer::GSample>; 2],
+    pub direct1: Vec<Vec3>,
+    pub sharp: Vec<glam::Vec4>,
+    pub out: Vec<glam::Vec4>,
+}
+
+/// Reads [`PostInputs`] from `r` (a post pass ran in its last frame).
+pub fn post_inputs(r: &Renderer) -> PostInputs {
+    let g = gpu();
+    let plan = r.last_plan().expect("a frame was rendered");
+    let pixels = r.settings().width as usize * r.settings().height as usize;
+    let layers = [0, 1].map(|l| {
+        if l < plan.layers as usize {
+            r.read_gbuffer(&g.device, &g.queue, l).expect("read layer").samples
+        } else {
+            vec![Default::default(); pixels]
+        }
+    });
+    PostInputs {
+        layers,
+        direct1: r.read_rgb(&g.device, &g.queue, r.direct1_buffer()).expect("read direct"),
+        sharp: read4(r, r.sharp_buffer().expect("a post pass ran")),
+        out: read4(r, r.hdr_buffer()),
+    }
+}
