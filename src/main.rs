@@ -128,6 +128,10 @@ struct SweepArgs {
     /// Radiosity resolution divisors to sweep (1, 2, 4).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_downsample))]
     radiosity_downsample: Vec<u32>,
+    /// Rays through the lens per pixel to sweep (the depth of field runs when --camera gives an
+    /// aperture; the truth then samples the lens).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dof_samples))]
+    dof_samples: Vec<u32>,
     /// Layer separations Δz to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
@@ -768,6 +772,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_mip_offset: args.radiosity_mip_offset,
         ao_downsample: args.ao_downsample,
         radiosity_downsample: args.radiosity_downsample,
+        dof_samples: args.dof_samples,
         dz: args.dz,
         layer1: args.layer1,
         scale: args.scale,

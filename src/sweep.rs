@@ -29,7 +29,7 @@ use crate::gbuffer::GBufferLayer;
 use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
 use crate::settings::{
-    AoEstimator, AoSettings, Layer1Variant, Precision, RadiositySettings, Settings,
+    AoEstimator, AoSettings, DofSettings, Layer1Variant, Precision, RadiositySettings, Settings,
 };
 use crate::truth::metrics::{self, ErrorStats};
 use crate::truth::{Shot, Tracer, TruthImage};
@@ -61,6 +61,9 @@ pub struct Knobs {
     pub ao_downsample: u32,
     /// Radiosity resolution divisor ([`RadiositySettings::downsample`]).
     pub radiosity_downsample: u32,
+    /// Rays through the lens per pixel ([`DofSettings::samples`]; the depth of field runs when
+    /// the sweep's camera has an aperture).
+    pub dof_samples: u32,
     /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
     pub dz: f32,
     /// How layer 1 is rasterized.
@@ -88,6 +91,7 @@ impl Knobs {
                 downsample: self.ao_downsample,
                 ..AoSettings::default()
             },
+            dof: DofSettings { samples: self.dof_samples, ..DofSettings::default() },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
@@ -144,6 +148,8 @@ pub struct Grid {
     pub ao_downsample: Vec<u32>,
     /// Radiosity resolution divisors.
     pub radiosity_downsample: Vec<u32>,
+    /// Rays through the lens per pixel.
+    pub dof_samples: Vec<u32>,
     /// Layer separations.
     pub dz: Vec<f32>,
     /// Layer-1 variants.
@@ -167,6 +173,7 @@ impl Default for Grid {
             radiosity_mip_offset: vec![settings.radiosity.mip_offset],
             ao_downsample: vec![settings.ao.downsample],
             radiosity_downsample: vec![settings.radiosity.downsample],
+            dof_samples: vec![settings.dof.samples],
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
@@ -203,6 +210,7 @@ impl Grid {
             radiosity_mip_offset: settings.radiosity.mip_offset,
             ao_downsample: settings.ao.downsample,
             radiosity_downsample: settings.radiosity.downsample,
+            dof_samples: settings.dof.samples,
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
@@ -215,6 +223,7 @@ impl Grid {
         let k = times(k, &self.radiosity_mip_offset, |k, v| k.radiosity_mip_offset = v);
         let k = times(k, &self.ao_downsample, |k, v| k.ao_downsample = v);
         let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
+        let k = times(k, &self.dof_samples, |k, v| k.dof_samples = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -490,7 +499,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -511,7 +520,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -523,6 +532,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_mip_offset,
             k.ao_downsample,
             k.radiosity_downsample,
+            k.dof_samples,
             k.dz,
             k.layer1,
             k.scale
@@ -572,7 +582,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 11] = [
+    let optional: [Column; 12] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
@@ -581,6 +591,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
         ("AO downsample", |k| k.ao_downsample.to_string()),
         ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
+        ("lens rays", |k| k.dof_samples.to_string()),
         ("Δz", |k| k.dz.to_string()),
         ("layer 1", |k| format!("{:?}", k.layer1)),
         ("scale", |k| k.scale.to_string()),
