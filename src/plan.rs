@@ -234,6 +234,9 @@ pub enum Reason {
     /// Its radius covers less than a pixel even where the scene comes nearest the camera: its
     /// taps could not leave the pixel they start from, so it would change nothing.
     UnderAPixel,
+    /// The camera has not moved since the last frame (or there is none): nothing moved while
+    /// the shutter was open.
+    Still,
 }
 
 /// The passes of one frame, in order, and why each effect left out is left out.
@@ -415,11 +418,11 @@ impl Plan {
     }
 
     /// This plan for a frame whose camera has not moved since the last one (or that has no last
-    /// one): motion blur has nothing to blur, and is left out ([`Reason::NotNeeded`]).
+    /// one): motion blur has nothing to blur, and is left out ([`Reason::Still`]).
     pub fn without_motion(mut self) -> Plan {
         if self.runs(Effect::MotionBlur) {
             self.passes.retain(|p| *p != PassId::MotionBlur);
-            self.left_out.push((Effect::MotionBlur, Reason::NotNeeded));
+            self.left_out.push((Effect::MotionBlur, Reason::Still));
         }
         self
     }
@@ -470,6 +473,7 @@ impl fmt::Display for Plan {
             Some(Reason::UnderAPixel) => {
                 "off (its radius spans less than a pixel where the scene is nearest)"
             }
+            Some(Reason::Still) => "off (the camera has not moved since the last frame)",
         };
         writeln!(f, "layers:  {}", self.layers)?;
         writeln!(

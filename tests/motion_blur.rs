@@ -78,7 +78,7 @@ fn a_still_camera_runs_no_motion_pass() {
         render_frames(&scene, &[camera.clone(), camera.clone()], settings(32, 24, open(1.0)));
     let plan = still.renderer.last_plan().unwrap();
     assert!(!plan.contains(&PassId::MotionBlur));
-    assert_eq!(plan.reason(Effect::MotionBlur), Some(Reason::NotNeeded));
+    assert_eq!(plan.reason(Effect::MotionBlur), Some(Reason::Still));
     assert!(still.renderer.sharp_buffer().is_none());
     let closed =
         render_frames(&scene, &[camera.orbited(-4.0), camera.clone()], settings(32, 24, open(0.0)));
