@@ -1,15 +1,15 @@
 // Separable depth- and normal-aware (bilateral) blur of a scalar image (or, with VEC4, of a
-// vec4 image), one direction per dispatch (VERTICAL or not). A tap's weight is a Gaussian of its distance, times
-// max(0, 1 - |z' - z| / (DEPTH_TOLERANCE z)) so nothing bleeds across depth edges, times
-// max(0, n.n')^8 so nothing bleeds across creases; pixels without a surface are skipped.
+// vec4 image), one direction per dispatch (VERTICAL or not). A tap's weight is a Gaussian of its
+// distance times shared/bilateral.wgsl's depth and normal weight, so nothing bleeds across depth
+// edges or creases; pixels without a surface are skipped.
 // src/cpu/blur.rs is the same on the CPU.
 // defines: PACKED VERTICAL VEC4
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/gbuffer_read.wgsl"
+#include "shared/bilateral.wgsl"
 
-const DEPTH_TOLERANCE: f32 = 0.05;
 
 // The radius in pixels, fixed per pipeline. A pipeline constant, not a uniform: lavapipe
 // specializes shaders on uniform values that bound loops and, fed a new frame each time, kept
@@ -60,11 +60,7 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let fk = f32(k);
         let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
-        let depth_weight = max(0.0, 1.0 - abs(s.depth - center.depth) / (DEPTH_TOLERANCE * center.depth));
-        let n = max(dot(s.normal, center.normal), 0.0);
-        let n2 = n * n;
-        let n4 = n2 * n2;
-        let w = gauss * depth_weight * n4 * n4;
+        let w = gauss * bilateral_weight(s.depth, s.normal, center.depth, center.normal);
         sum += w * source[q];
         weights += w;
     }

@@ -2,7 +2,7 @@
 // and height back to every pixel. Texel t of the low-resolution image was computed at the pixel
 // mip_origin(LEVEL, t) (shared/mip.wgsl: the rotated grid of the depth pyramid, a real pixel of
 // its block); each pixel takes its four nearest texels with their bilinear weights times the
-// bilateral blur's depth and normal weights (wgsl/blur.wgsl) of the surface at each texel's
+// blur's depth and normal weight (shared/bilateral.wgsl) of the surface at each texel's
 // pixel against its own layer-0 surface, so nothing bleeds across depth edges or creases. Where
 // none of the four passes (all weights 0) it takes the 4x4 texels around with the blur's
 // weights alone, and where none of those passes either, the texel whose surface lies nearest in
@@ -13,8 +13,8 @@
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/mip.wgsl"
+#include "shared/bilateral.wgsl"
 
-const DEPTH_TOLERANCE: f32 = 0.05;
 
 // The level the effect was computed at (1: half, 2: quarter resolution) and the value of pixels
 // without a surface, fixed per pipeline.
@@ -52,11 +52,7 @@ fn candidate(t: vec2<u32>, size: vec2<u32>, z: f32, n: vec3<f32>) -> Candidate {
     }
     c.value = low[t.y * size.x + t.x];
     c.gap = abs(zo - z);
-    let depth_weight = max(0.0, 1.0 - c.gap / (DEPTH_TOLERANCE * z));
-    let cn = max(dot(gword_normal(w0), n), 0.0);
-    let c2 = cn * cn;
-    let c4 = c2 * c2;
-    c.weight = depth_weight * c4 * c4;
+    c.weight = bilateral_weight(zo, gword_normal(w0), z, n);
     return c;
 }
 

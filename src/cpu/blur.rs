@@ -1,8 +1,20 @@
 //! CPU reference of `wgsl/blur.wgsl`: one direction of the bilateral blur.
 
+use glam::Vec3;
+
 use crate::gbuffer::GSample;
 
 const DEPTH_TOLERANCE: f32 = 0.05;
+
+/// As `bilateral_weight` (`wgsl/shared/bilateral.wgsl`): the depth and normal weight of a sample
+/// at view depth `z` with normal `n` against the centre's `zc`, `nc`.
+pub fn bilateral_weight(z: f32, n: Vec3, zc: f32, nc: Vec3) -> f32 {
+    let depth_weight = (1.0 - (z - zc).abs() / (DEPTH_TOLERANCE * zc)).max(0.0);
+    let c = n.dot(nc).max(0.0);
+    let c2 = c * c;
+    let c4 = c2 * c2;
+    depth_weight * c4 * c4
+}
 
 /// Blurs `source` along x (`vertical` false) or y, guided by the G-buffer `samples`.
 pub fn blur(
@@ -37,13 +49,7 @@ pub fn blur(
                 }
                 let fk = k as f32;
                 let gauss = (-fk * fk / (2.0 * sigma * sigma)).exp();
-                let depth_weight = (1.0
-                    - (s.depth - center.depth).abs() / (DEPTH_TOLERANCE * center.depth))
-                    .max(0.0);
-                let n = s.normal.dot(center.normal).max(0.0);
-                let n2 = n * n;
-                let n4 = n2 * n2;
-                let w = gauss * depth_weight * n4 * n4;
+                let w = gauss * bilateral_weight(s.depth, s.normal, center.depth, center.normal);
                 sum += w * source[q];
                 weights += w;
             }

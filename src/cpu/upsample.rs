@@ -3,10 +3,9 @@
 
 use std::ops::{Add, Div, Mul};
 
+use crate::cpu::blur::bilateral_weight;
 use crate::cpu::pyramid::{mip_origin, mip_size};
 use crate::gbuffer::GSample;
-
-const DEPTH_TOLERANCE: f32 = 0.05;
 
 /// As `candidate`: whether texel `t` of `low` (`size` texels wide) stands for a surface, and
 /// then its value, its depth gap to `s` and the blur's depth and normal weight against `s`.
@@ -24,11 +23,8 @@ fn candidate<T: Copy>(
         return None;
     }
     let gap = (so.depth - s.depth).abs();
-    let depth_weight = (1.0 - gap / (DEPTH_TOLERANCE * s.depth)).max(0.0);
-    let c = so.normal.dot(s.normal).max(0.0);
-    let c2 = c * c;
-    let c4 = c2 * c2;
-    Some((low[(t.1 * size.0 + t.0) as usize], gap, depth_weight * c4 * c4))
+    let weight = bilateral_weight(so.depth, so.normal, s.depth, s.normal);
+    Some((low[(t.1 * size.0 + t.0) as usize], gap, weight))
 }
 
 /// Every pixel of a `width` x `height` image from `low`, the effect computed at `level` (texel t
