@@ -69,9 +69,11 @@ pub use passes::radiosity::RadiosityBuffers;
 pub use plan::{Effect, PassId, Plan, Reason};
 pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, GpuTextureSlot, ImportedBuffers, SceneBuffers};
-pub use scene::{Camera, Filter, Lens, Material, Projection, Scene, SceneInfo, TextureRef, Wrap};
+pub use scene::{
+    AlphaMode, Camera, Filter, Lens, Material, Projection, Scene, SceneInfo, TextureRef, Wrap,
+};
 pub use settings::{
     AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant,
     MotionBlurSettings, Normalization, Precision, Preset, RadiosityEstimator, RadiositySettings,
-    ReflectionSettings, Settings, ShadowSettings,
+    ReflectionSettings, Settings, ShadowSettings, TransparencySettings,
 };

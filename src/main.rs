@@ -311,6 +311,10 @@ struct EffectArgs {
     dof: DofArgs,
     #[command(flatten)]
     motion_blur: MotionBlurArgs,
+    /// Blended surfaces peeled per pixel, 1 to 16 (it runs when the scene has a blended
+    /// material: glTF alphaMode BLEND, OBJ d or Tr below 1) [default: 4].
+    #[arg(long)]
+    transparency_layers: Option<u32>,
 }
 
 impl EffectArgs {
@@ -321,6 +325,7 @@ impl EffectArgs {
         self.reflections.apply(&mut s.reflections);
         self.dof.apply(&mut s.dof);
         self.motion_blur.apply(&mut s.motion_blur);
+        s.transparency.layers = self.transparency_layers.unwrap_or(s.transparency.layers);
     }
 }
 

@@ -49,8 +49,13 @@ pub enum PassId {
     RadiosityBlur,
     /// Screen-space reflections.
     Reflections,
+    /// The transparency peels: each the next blended surface in front of layer 0, resolved,
+    /// lit and accumulated.
+    TransparencyPeel,
     /// `DIRECT + AV * AMBIENT + RADIOSITY + REFLECTIONS` into the HDR image.
     Composite,
+    /// The peeled blended surfaces over the composite.
+    TransparencyComposite,
     /// Depth of field: the composite seen through the camera's lens.
     Dof,
     /// Motion blur: the image over the time the shutter is open.
@@ -67,6 +72,7 @@ pub(crate) enum StageId {
     Direct,
     Radiosity,
     Reflections,
+    Transparency,
     Composite,
     Dof,
     MotionBlur,
@@ -74,7 +80,7 @@ pub(crate) enum StageId {
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 16] = [
+    pub const FIXED: [PassId; 18] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -88,7 +94,9 @@ impl PassId {
         PassId::RadiosityTemporal,
         PassId::RadiosityBlur,
         PassId::Reflections,
+        PassId::TransparencyPeel,
         PassId::Composite,
+        PassId::TransparencyComposite,
         PassId::Dof,
         PassId::MotionBlur,
     ];
@@ -111,6 +119,8 @@ impl PassId {
             PassId::RadiosityBlur => "radiosity.blur",
             PassId::Reflections => "reflections",
             PassId::Composite => "composite",
+            PassId::TransparencyPeel => "transparency.peel",
+            PassId::TransparencyComposite => "transparency.composite",
             PassId::Dof => "dof",
             PassId::MotionBlur => "motion_blur",
         })
@@ -127,6 +137,7 @@ impl PassId {
                 Some(Effect::Radiosity)
             }
             PassId::Reflections => Some(Effect::Reflections),
+            PassId::TransparencyPeel | PassId::TransparencyComposite => Some(Effect::Transparency),
             PassId::Dof => Some(Effect::Dof),
             PassId::MotionBlur => Some(Effect::MotionBlur),
             _ => None,
@@ -156,15 +167,17 @@ impl PassId {
             }
             PassId::Reflections => StageId::Reflections,
             PassId::Composite => StageId::Composite,
+            PassId::TransparencyPeel | PassId::TransparencyComposite => StageId::Transparency,
             PassId::Dof => StageId::Dof,
             PassId::MotionBlur => StageId::MotionBlur,
         }
     }
 
-    /// Whether the pass reads the composite's image and writes another (depth of field, motion
-    /// blur: they run after it, in plan order, the last writing the HDR image).
+    /// Whether the pass reads the composite's image and writes another (the transparency's
+    /// composite, depth of field, motion blur: they run after it, in plan order, the last
+    /// writing the HDR image).
     pub fn is_post(&self) -> bool {
-        matches!(self, PassId::Dof | PassId::MotionBlur)
+        matches!(self, PassId::TransparencyComposite | PassId::Dof | PassId::MotionBlur)
     }
 
     /// Whether the pass draws or resolves the G-buffer (left out when the caller provides one).
@@ -196,11 +209,13 @@ pub enum Effect {
     Dof,
     /// Motion blur (needs an open shutter and a camera that moved since the last frame).
     MotionBlur,
+    /// Transparency (needs a blended material).
+    Transparency,
 }
 
 impl Effect {
     /// Every effect.
-    pub const ALL: [Effect; 7] = [
+    pub const ALL: [Effect; 8] = [
         Effect::Ao,
         Effect::Direct,
         Effect::Shadows,
@@ -208,6 +223,7 @@ impl Effect {
         Effect::Reflections,
         Effect::Dof,
         Effect::MotionBlur,
+        Effect::Transparency,
     ];
 
     /// The effect's name, as `--effects` spells it.
@@ -220,6 +236,7 @@ impl Effect {
             Effect::Reflections => "reflections",
             Effect::Dof => "dof",
             Effect::MotionBlur => "motion_blur",
+            Effect::Transparency => "transparency",
         }
     }
 }
@@ -360,6 +377,12 @@ impl Plan {
             settings.motion_blur.shutter > 0.0,
             true,
         );
+        let transparency = decide(
+            Effect::Transparency,
+            settings.transparency.enabled && e.transparency,
+            info.blended,
+            true,
+        );
         let wants_layer1 = (ao && settings.ao.two_layers)
             || radiosity
             || reflections
@@ -401,7 +424,13 @@ impl Plan {
         if reflections {
             passes.push(PassId::Reflections);
         }
+        if transparency {
+            passes.push(PassId::TransparencyPeel);
+        }
         passes.push(PassId::Composite);
+        if transparency {
+            passes.push(PassId::TransparencyComposite);
+        }
         if dof {
             passes.push(PassId::Dof);
         }
@@ -487,6 +516,7 @@ impl fmt::Display for Plan {
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
         writeln!(f, "dof:     {}", why(Effect::Dof))?;
         writeln!(f, "motion blur: {}", why(Effect::MotionBlur))?;
+        writeln!(f, "transparency: {}", why(Effect::Transparency))?;
         let shadows: Vec<String> = self
             .shadow_lights()
             .into_iter()

@@ -23,6 +23,7 @@ use crate::passes::raster::RasterStage;
 use crate::passes::reflections::ReflectionsStage;
 use crate::passes::resolve::ResolveStage;
 use crate::passes::shadow::ShadowStage;
+use crate::passes::transparency::TransparencyStage;
 use crate::passes::{FrameContext, Recorder, Stage};
 use crate::plan::{Effect, PassId, Plan, StageId};
 use crate::scene::Camera;
@@ -141,6 +142,7 @@ struct Stages {
     direct: DirectStage,
     radiosity: Option<RadiosityStage>,
     reflections: Option<ReflectionsStage>,
+    transparency: Option<TransparencyStage>,
     composite: CompositeStage,
     dof: Option<DofStage>,
     motion_blur: Option<MotionBlurStage>,
@@ -157,6 +159,7 @@ impl Stages {
             direct: DirectStage::new(device, pixels),
             radiosity: None,
             reflections: None,
+            transparency: None,
             composite: CompositeStage::new(device, pixels),
             dof: None,
             motion_blur: None,
@@ -174,6 +177,7 @@ impl Stages {
             StageId::Direct => &self.direct,
             StageId::Radiosity => self.radiosity.as_ref().expect(prepared),
             StageId::Reflections => self.reflections.as_ref().expect(prepared),
+            StageId::Transparency => self.transparency.as_ref().expect(prepared),
             StageId::Composite => &self.composite,
             StageId::Dof => self.dof.as_ref().expect(prepared),
             StageId::MotionBlur => self.motion_blur.as_ref().expect(prepared),
@@ -188,6 +192,7 @@ impl Stages {
         stages.push(&self.direct);
         stages.extend(self.radiosity.as_ref().map(|s| s as &dyn Stage));
         stages.extend(self.reflections.as_ref().map(|s| s as &dyn Stage));
+        stages.extend(self.transparency.as_ref().map(|s| s as &dyn Stage));
         stages.push(&self.composite);
         stages.extend(self.dof.as_ref().map(|s| s as &dyn Stage));
         stages.extend(self.motion_blur.as_ref().map(|s| s as &dyn Stage));
@@ -215,6 +220,7 @@ impl Stages {
                 .filter(|_| runs(Effect::Shadows))
                 .map(ShadowStage::inputs),
             direct: [self.direct.radiance(0), self.direct.radiance(1)],
+            lighting: &self.direct,
             av: self.ao.as_ref().filter(|_| runs(Effect::Ao)).map(|a| a.av(settings)),
             irradiance: radiosity.map(|r| r.irradiance),
             reflections: self
@@ -292,11 +298,12 @@ impl Renderer {
             | wgpu::Features::TIMESTAMP_QUERY
     }
 
-    /// Limits deep-gbuffer needs beyond the WebGPU defaults: 12 storage buffers per stage. Raise
-    /// `max_storage_buffer_binding_size` to the adapter's for large images (a layer at 1920x1080
-    /// in full precision is 133 MB).
+    /// Limits deep-gbuffer needs beyond the WebGPU defaults: 16 storage buffers per stage (the
+    /// rasterizer reads the materials' textures and coordinates for the alpha test besides its
+    /// own buffers). Raise `max_storage_buffer_binding_size` to the adapter's for large images
+    /// (a layer at 1920x1080 in full precision is 133 MB).
     pub fn required_limits() -> wgpu::Limits {
-        wgpu::Limits { max_storage_buffers_per_shader_stage: 12, ..wgpu::Limits::default() }
+        wgpu::Limits { max_storage_buffers_per_shader_stage: 16, ..wgpu::Limits::default() }
     }
 
     /// All of the above, for [`Gpu::new`](crate::gpu::Gpu::new): adapters with 64-bit atomics
@@ -555,6 +562,12 @@ impl Renderer {
         let mut plan = self.plan(scene, camera);
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
+            // The peels are drawn against the rasterizer's layer 0, which a provided G-buffer
+            // does not come with.
+            if plan.runs(Effect::Transparency) {
+                plan.passes.retain(|p| p.effect() != Some(Effect::Transparency));
+                plan.left_out.push((Effect::Transparency, crate::plan::Reason::NotNeeded));
+            }
         }
         let current = self.prepare(device, queue, scene, camera, &plan)?;
         let stages = &self.stages;
@@ -628,6 +641,10 @@ impl Renderer {
                 st.reflections.get_or_insert_with(|| ReflectionsStage::new(device, s));
             let env = self.environment.as_ref().map(|e| e.size);
             reflections.prepare(queue, s, scene, plan.layers == 2, env);
+        }
+        if plan.runs(Effect::Transparency) {
+            let t = st.transparency.get_or_insert_with(|| TransparencyStage::new(device, s));
+            t.prepare(queue, scene);
         }
         st.composite.prepare(queue, scene);
         if plan.passes.iter().any(PassId::is_post) {

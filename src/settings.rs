@@ -647,6 +647,8 @@ pub struct Settings {
     pub dof: DofSettings,
     /// Motion blur (runs when the shutter is open and the camera moved since the last frame).
     pub motion_blur: MotionBlurSettings,
+    /// Transparency (runs when the scene has a blended material).
+    pub transparency: TransparencySettings,
     /// Effects switched on; the [`Plan`](crate::plan::Plan) runs them where the scene calls for them.
     pub effects: Effects,
 }
@@ -668,6 +670,7 @@ impl Default for Settings {
             reflections: ReflectionSettings::default(),
             dof: DofSettings::default(),
             motion_blur: MotionBlurSettings::default(),
+            transparency: TransparencySettings::default(),
             effects: Effects::default(),
         }
     }
@@ -749,6 +752,9 @@ impl Settings {
         if self.motion_blur.enabled {
             self.motion_blur.validate()?;
         }
+        if self.transparency.enabled {
+            self.transparency.validate()?;
+        }
         Ok(())
     }
 }
@@ -771,6 +777,8 @@ pub struct Effects {
     pub dof: bool,
     /// Motion blur (needs an open shutter and a moving camera).
     pub motion_blur: bool,
+    /// Transparency (needs a blended material).
+    pub transparency: bool,
 }
 
 impl Default for Effects {
@@ -783,6 +791,7 @@ impl Default for Effects {
             reflections: true,
             dof: true,
             motion_blur: true,
+            transparency: true,
         }
     }
 }
@@ -801,6 +810,7 @@ impl Effects {
             reflections: false,
             dof: false,
             motion_blur: false,
+            transparency: false,
         };
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             match name {
@@ -811,11 +821,12 @@ impl Effects {
                 "reflections" => e.reflections = true,
                 "dof" => e.dof = true,
                 "motion_blur" => e.motion_blur = true,
+                "transparency" => e.transparency = true,
                 other => {
                     return Err(crate::Error::setting(
                         "effects",
                         format!(
-                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections, dof, motion_blur; or auto)"
+                            "unknown effect `{other}` (known: ao, direct, shadows, radiosity, reflections, dof, motion_blur, transparency; or auto)"
                         ),
                     ));
                 }
@@ -941,6 +952,41 @@ impl MotionBlurSettings {
             return Err(Error::setting(
                 "motion_blur.max_blur",
                 format!("{} (must be 1 to 256 pixels)", self.max_blur),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Transparency by depth peeling (`wgsl/transparency.wgsl`, documented there): the `layers`
+/// nearest blended surfaces in front of the opaque layer 0 are peeled one at a time by the
+/// rasterizer, each shaded (direct light with shadows, the unoccluded ambient term, emission)
+/// and blended over what lies behind it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransparencySettings {
+    /// Run the passes (when the scene has a blended material).
+    pub enabled: bool,
+    /// Blended surfaces peeled per pixel (k), 1 to [`MAX_PEELS`]. Surfaces beyond the k-th
+    /// nearest are left out: what lies behind them shows through as if they were not there.
+    pub layers: u32,
+}
+
+/// The most transparency layers (peels) a frame may take.
+pub const MAX_PEELS: u32 = 16;
+
+impl Default for TransparencySettings {
+    fn default() -> Self {
+        TransparencySettings { enabled: true, layers: 4 }
+    }
+}
+
+impl TransparencySettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=MAX_PEELS).contains(&self.layers) {
+            return Err(Error::setting(
+                "transparency.layers",
+                format!("{} (must be 1 to {MAX_PEELS})", self.layers),
             ));
         }
         Ok(())

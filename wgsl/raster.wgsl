@@ -1,5 +1,5 @@
 // Software rasterization of both deep G-buffer layers into visibility buffers.
-// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 EARLY_TEST DEPTH_PHASE COUNT
+// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 EARLY_TEST DEPTH_PHASE COUNT PEEL
 //
 // raster_small: one thread per input triangle: transform, clip against the near plane and the
 //   guard band (in homogeneous space), snap to 1/256-pixel fixed point, cull back faces, then
@@ -27,11 +27,22 @@
 // variant, the previous frame's layer 0 otherwise; REPROJECT compares at the fragment's
 // reprojected position in the previous frame). INT64 / DEPTH_PHASE: see shared/vis.wgsl.
 // COUNT counts every covered fragment instead (watertightness tests).
+//
+// Materials: blended triangles (MATERIAL_BLEND) are left out of the opaque layers (and so of the
+// shadow maps, drawn by the same kernel); a masked one (MATERIAL_MASK) is a hole wherever its
+// opacity (base colour alpha times the base-colour texture's alpha, at the fragment's
+// perspective-correct barycentrics) is below its cutoff: dropped whole when it has no texture and
+// its factor is below, tested per fragment when it has one. PEEL (with WRITE_L1) draws blended
+// triangles only, into vis1: the nearest fragment whose word (depth, id) lies strictly behind
+// the previous peel's word in zref and strictly in front of the opaque layer 0 (`opaque`), so k
+// such steps peel the k nearest blended surfaces in front of the opaque ones, ties by id.
 
 #include "shared/frame.wgsl"
 #include "shared/material.wgsl"
 #include "shared/wide.wgsl"
 #include "shared/vis.wgsl"
+#include "shared/texture.wgsl"
+#include "shared/barycentric.wgsl"
 
 const SUBPIXEL: i32 = 256;
 // Triangles at most SMALL_EXTENT pixels across are drawn by their own thread (at most 64: the
@@ -79,9 +90,14 @@ struct Binned {
 #if COUNT
 @group(0) @binding(11) var<storage, read_write> counts: array<atomic<u32>>;
 #endif
-#if WRITE_L0
-// Only its length is read: whether a material's texture lies inside it.
+// The texels, read by the alpha test; the diagnostics check that textures lie inside it.
 @group(0) @binding(12) var<storage, read> texels: array<u32>;
+// Texture coordinates (sets 0 and 1) for the alpha test.
+@group(0) @binding(14) var<storage, read> uvs: array<f32>;
+@group(0) @binding(15) var<storage, read> uvs1: array<f32>;
+#if PEEL
+// This frame's opaque layer 0: peeled fragments lie in front of it.
+@group(0) @binding(16) var<storage, read> opaque: array<u32>;
 #endif
 
 // Diagnostics words in `bins` (`RasterCounters` in src/frame/uniforms.rs).
@@ -257,8 +273,23 @@ fn covers(e: i32, top_left_edge: bool) -> bool {
     return e > 0 || (e == 0 && top_left_edge);
 }
 
-fn layer1_accepts(pixel: vec2<i32>, d: f32) -> bool {
+// Whether the word (d, t) orders strictly before / after the word of depth bits hi and id lo.
+fn word_before(d: f32, t: u32, hi: u32, lo: u32) -> bool {
+    let db = bitcast<u32>(d);
+    return db < hi || (db == hi && t < lo);
+}
+
+fn word_after(d: f32, t: u32, hi: u32, lo: u32) -> bool {
+    let db = bitcast<u32>(d);
+    return db > hi || (db == hi && t > lo);
+}
+
+fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
 #if WRITE_L1
+#if PEEL
+    let p = u32(pixel.y) * frame.width + u32(pixel.x);
+    return word_after(d, t, zref[2u * p + 1u], zref[2u * p]) && word_before(d, t, opaque[2u * p + 1u], opaque[2u * p]);
+#else
 #if REPROJECT
     let r = reproject(frame, vec2<f32>(pixel) + 0.5, d);
     let pc = r.clip;
@@ -276,13 +307,17 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32) -> bool {
     let z0 = zref[2u * (u32(pixel.y) * frame.width + u32(pixel.x)) + 1u];
     return z0 != VIS_EMPTY && d > bitcast<f32>(z0) + frame.dz;
 #endif
+#endif
 #else
     return false;
 #endif
 }
 
-fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
+fn fragment(pixel: vec2<i32>, d: f32, t: u32, tested: bool) {
     if !(d > 0.0 && d <= frame.far) {
+        return;
+    }
+    if tested && pixel_opacity(t, pixel, d) < materials[tri_materials[t]].alpha_cutoff {
         return;
     }
     let p = u32(pixel.y) * frame.width + u32(pixel.x);
@@ -293,7 +328,7 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
     vis0_write(p, d, t);
 #endif
 #if WRITE_L1
-    if layer1_accepts(pixel, d) {
+    if layer1_accepts(pixel, d, t) {
         vis1_write(p, d, t);
     }
 #endif
@@ -303,7 +338,7 @@ fn depth_at(e: vec3<f32>, s: Setup) -> f32 {
     return dot(e, s.r) / dot(e, s.q);
 }
 
-fn raster_small_triangle(s: Setup, t: u32) {
+fn raster_small_triangle(s: Setup, t: u32, tested: bool) {
     // Everything relative to the first pixel centre, so it fits in i32.
     let o = s.lo * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
     let a = s.v0 - o;
@@ -317,10 +352,49 @@ fn raster_small_triangle(s: Setup, t: u32) {
             let e1 = (a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x);
             let e2 = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
             if covers(e0, tl.x) && covers(e1, tl.y) && covers(e2, tl.z) {
-                fragment(vec2<i32>(x, y), depth_at(vec3<f32>(f32(e0), f32(e1), f32(e2)), s), t);
+                fragment(vec2<i32>(x, y), depth_at(vec3<f32>(f32(e0), f32(e1), f32(e2)), s), t, tested);
             }
         }
     }
+}
+
+// What this raster draws of triangle t (its material id in range): nothing, every covered
+// fragment, or the fragments that pass the alpha test.
+const DRAW_NONE: u32 = 0u;
+const DRAW_ALL: u32 = 1u;
+const DRAW_TESTED: u32 = 2u;
+
+fn draw_kind(t: u32) -> u32 {
+#if COUNT
+    return DRAW_ALL;
+#else
+    let mid = tri_materials[t];
+    let flags = materials[mid].flags;
+#if PEEL
+    return select(DRAW_NONE, DRAW_ALL, (flags & MATERIAL_BLEND) != 0u);
+#else
+    if (flags & MATERIAL_BLEND) != 0u {
+        return DRAW_NONE;
+    }
+    if (flags & MATERIAL_MASK) == 0u {
+        return DRAW_ALL;
+    }
+    if (slot_bits(flags) & (1u << SLOT_BASE_COLOR)) != 0u {
+        return DRAW_TESTED;
+    }
+    return select(DRAW_NONE, DRAW_ALL, unit(materials[mid].base_color.a) >= materials[mid].alpha_cutoff);
+#endif
+#endif
+}
+
+// The opacity of triangle t where the ray through pixel's centre meets it at view depth d.
+fn pixel_opacity(t: u32, pixel: vec2<i32>, d: f32) -> f32 {
+    let tri = vec3<u32>(indices[3u * t], indices[3u * t + 1u], indices[3u * t + 2u]);
+    let a = mat_mul(frame.view, vec4<f32>(position(tri.x), 1.0)).xyz;
+    let b = mat_mul(frame.view, vec4<f32>(position(tri.y), 1.0)).xyz;
+    let c = mat_mul(frame.view, vec4<f32>(position(tri.z), 1.0)).xyz;
+    let bary = ray_barycentrics(pixel_ray(frame, vec2<f32>(pixel) + 0.5, d), a, b, c);
+    return material_opacity(tri_materials[t], tri, bary);
 }
 
 // Why triangle t must not be drawn: 0 when it can be, else the diagnostics word that counts it.
@@ -348,6 +422,9 @@ fn rejection(t: u32) -> u32 {
 // by field (a whole material is 288 bytes).
 fn texture_outside(mid: u32) -> bool {
 #if WRITE_L0
+#if PEEL
+    return false;
+#endif
     if (frame.flags & FRAME_DIAGNOSTICS) == 0u {
         return false;
     }
@@ -389,12 +466,16 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if texture_outside(tri_materials[t]) {
         count_diagnostic(DIAG_TEXTURE);
     }
+    let kind = draw_kind(t);
+    if kind == DRAW_NONE {
+        return;
+    }
     var poly: array<ClipVertex, MAX_POLY>;
     let count = clip_triangle(t, &poly);
     for (var k = 0u; k + 2u < count; k++) {
         let s = setup(t, &poly, k);
         if s.kind == 1u {
-            raster_small_triangle(s, t);
+            raster_small_triangle(s, t, kind == DRAW_TESTED);
         } else if s.kind == 2u {
             bin_triangle(s, t);
         }
@@ -493,6 +574,7 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     s.q = b.q;
     bound(&s);
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
+    let tested = draw_kind(b.triangle) == DRAW_TESTED;
     let tiles = (s.hi - s.lo) / 16 + 1;
     let tile_count = u32(tiles.x * tiles.y);
     for (var tile = slice; tile < tile_count; tile += b.slices) {
@@ -508,7 +590,7 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
             let e2 = edge_wide(s.v0, s.v1, p);
             if covers_wide(e0, tl.x) && covers_wide(e1, tl.y) && covers_wide(e2, tl.z) {
                 let e = vec3<f32>(wide_to_f32(e0), wide_to_f32(e1), wide_to_f32(e2));
-                fragment(pixel, depth_at(e, s), b.triangle);
+                fragment(pixel, depth_at(e, s), b.triangle, tested);
             }
         }
     }

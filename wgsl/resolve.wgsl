@@ -10,6 +10,8 @@
 #include "shared/material.wgsl"
 #include "shared/vis.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/texture.wgsl"
+#include "shared/barycentric.wgsl"
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
@@ -33,96 +35,11 @@ fn load3(buf: u32, i: u32) -> vec3<f32> {
     return vec3<f32>(normals[3u * i], normals[3u * i + 1u], normals[3u * i + 2u]);
 }
 
-fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
-}
-
-fn texel(t: TextureSlot, x: u32, y: u32, srgb: bool) -> vec3<f32> {
-    let c = unpack4x8unorm(texels[t.offset + y * t.width + x]).rgb;
-    return select(c, srgb_to_linear(c), srgb);
-}
-
-// A coordinate brought into one period of its wrap mode (exactly, before it is scaled to
-// texels, so that a large coordinate keeps its precision): [0, 1) repeating, [0, 1] clamped,
-// [0, 2) mirrored.
-fn wrap_reduce(u: f32, mode: u32) -> f32 {
-    if mode == 1u {
-        return clamp(u, 0.0, 1.0);
-    }
-    if mode == 2u {
-        return u - 2.0 * floor(u * 0.5);
-    }
-    return fract(u);
-}
-
-// Texel index i (in [-1, 2n] after wrap_reduce) as the wrap mode reads it.
-fn wrap_index(i: i32, n: i32, mode: u32) -> u32 {
-    if mode == 1u {
-        return u32(clamp(i, 0, n - 1));
-    }
-    if mode == 2u {
-        if i < 0 {
-            return 0u;
-        }
-        if i < n {
-            return u32(i);
-        }
-        if i - n < n {
-            return u32(n - 1 - (i - n));
-        }
-        return 0u;
-    }
-    return u32((i % n + n) % n);
-}
-
-// Texture slot t at uv (already transformed), wrapped and filtered as its sampler says; sRGB
-// texels are decoded before they are filtered.
-fn sample_texture(t: TextureSlot, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
-    let size = vec2<f32>(f32(t.width), f32(t.height));
-    let ws = t.sampler & 3u;
-    let wt = (t.sampler >> 2u) & 3u;
-    let r = vec2<f32>(wrap_reduce(uv.x, ws), wrap_reduce(uv.y, wt));
-    let w = i32(t.width);
-    let h = i32(t.height);
-    if (t.sampler & 16u) != 0u {
-        let i = vec2<i32>(floor(r * size));
-        return texel(t, wrap_index(i.x, w, ws), wrap_index(i.y, h, wt), srgb);
-    }
-    let p = r * size - 0.5;
-    let f = fract(p);
-    let i0 = vec2<i32>(floor(p));
-    let x0 = wrap_index(i0.x, w, ws);
-    let y0 = wrap_index(i0.y, h, wt);
-    let x1 = wrap_index(i0.x + 1, w, ws);
-    let y1 = wrap_index(i0.y + 1, h, wt);
-    let top = mix(texel(t, x0, y0, srgb), texel(t, x1, y0, srgb), f.x);
-    let bottom = mix(texel(t, x0, y1, srgb), texel(t, x1, y1, srgb), f.x);
-    return mix(top, bottom, f.y);
-}
-
-// Vertex i's coordinates in set 0 or 1 (zero where the buffer holds none).
-fn vertex_uv(i: u32, coord_set: u32) -> vec2<f32> {
-    if coord_set == 0u {
-        return vec2<f32>(uvs[2u * i], uvs[2u * i + 1u]);
-    }
-    if 2u * i + 1u < arrayLength(&uvs1) {
-        return vec2<f32>(uvs1[2u * i], uvs1[2u * i + 1u]);
-    }
-    return vec2<f32>(0.0);
-}
-
 fn vertex_tangent(i: u32) -> vec4<f32> {
     if 4u * i + 3u < arrayLength(&tangents) {
         return vec4<f32>(tangents[4u * i], tangents[4u * i + 1u], tangents[4u * i + 2u], tangents[4u * i + 3u]);
     }
     return vec4<f32>(0.0);
-}
-
-// The point's coordinates as slot t reads them: its set interpolated, then its transform.
-fn slot_uv(t: TextureSlot, tri: vec3<u32>, bary: vec3<f32>) -> vec2<f32> {
-    let coord_set = (t.sampler >> 5u) & 1u;
-    let uv = vertex_uv(tri.x, coord_set) * bary.x + vertex_uv(tri.y, coord_set) * bary.y + vertex_uv(tri.z, coord_set) * bary.z;
-    return vec2<f32>(dot(t.transform_u.xy, uv) + t.transform_u.z, dot(t.transform_v.xy, uv) + t.transform_v.z);
 }
 
 // Texture slot k (which material mid uses) at this point: whether it is read (its texture fits
@@ -139,7 +56,7 @@ fn read_slot(mid: u32, k: u32, tri: vec3<u32>, bary: vec3<f32>, srgb: bool) -> S
     if !(texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6))) {
         return SlotRead(false, vec3<f32>(0.0));
     }
-    return SlotRead(true, sample_texture(t, uv, srgb));
+    return SlotRead(true, sample_texture(t, uv, srgb).rgb);
 }
 
 // The normal n turned by the tangent-space normal texture value c (linear rgb): the frame is
@@ -203,31 +120,9 @@ fn shade(pixel: vec2<u32>) -> GSample {
     let a = mat_mul(frame.view, vec4<f32>(w0, 1.0)).xyz;
     let b = mat_mul(frame.view, vec4<f32>(w1, 1.0)).xyz;
     let c = mat_mul(frame.view, vec4<f32>(w2, 1.0)).xyz;
-    // Ray through the pixel centre, in view space.
-    let target_point = view_position(frame, vec2<f32>(pixel) + 0.5, d);
-    var origin = vec3<f32>(0.0);
-    var dir = target_point;
-    if frame.ortho != 0u {
-        origin = vec3<f32>(target_point.xy, 0.0);
-        dir = vec3<f32>(0.0, 0.0, -1.0);
-    }
-    // Moller-Trumbore, keeping barycentrics even slightly outside (the pixel centre is inside by
-    // coverage; rounding may put it a hair outside), then clamped.
-    let e1 = b - a;
-    let e2 = c - a;
-    let pv = cross(dir, e2);
-    let det = dot(e1, pv);
-    var bary = vec3<f32>(1.0 / 3.0);
-    if abs(det) > 1e-30 {
-        let tv = origin - a;
-        let u = dot(tv, pv) / det;
-        let v = dot(dir, cross(tv, e1)) / det;
-        let raw = clamp(vec3<f32>(1.0 - u - v, u, v), vec3<f32>(0.0), vec3<f32>(1.0));
-        let sum = raw.x + raw.y + raw.z;
-        if sum > 0.0 {
-            bary = raw / sum;
-        }
-    }
+    let ray = pixel_ray(frame, vec2<f32>(pixel) + 0.5, d);
+    let origin = ray.origin;
+    let bary = ray_barycentrics(ray, a, b, c);
     let world = w0 * bary.x + w1 * bary.y + w2 * bary.z;
 
     // Normal: interpolated vertex normals, or the face normal where they are missing or broken.

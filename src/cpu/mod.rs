@@ -16,4 +16,5 @@ pub mod resolve;
 pub mod shadow;
 pub mod slices;
 pub mod spiral;
+pub mod transparency;
 pub mod upsample;

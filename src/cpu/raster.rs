@@ -4,8 +4,10 @@
 use glam::Vec3;
 
 use crate::cpu::frame::mat_mul;
+use crate::cpu::resolve::pixel_opacity;
 use crate::frame::FrameUniform;
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
+use crate::scene::AlphaMode;
 
 const SUBPIXEL: i32 = 256;
 const SMALL_EXTENT: i32 = 16;
@@ -18,13 +20,83 @@ pub struct RasterInput<'a> {
     pub triangles: &'a [[u32; 3]],
     /// Per triangle: both faces visible.
     pub double_sided: &'a [bool],
+    /// The scene whose materials' alpha modes apply (blended triangles left out of the opaque
+    /// layers, masked ones tested), or `None`: every triangle is opaque.
+    pub scene: Option<&'a crate::Scene>,
 }
 
 impl<'a> RasterInput<'a> {
     /// The triangles of `scene`; `double_sided` from [`double_sided_triangles`].
     pub fn new(scene: &'a crate::Scene, double_sided: &'a [bool]) -> Self {
-        RasterInput { positions: &scene.positions, triangles: &scene.triangles, double_sided }
+        RasterInput {
+            positions: &scene.positions,
+            triangles: &scene.triangles,
+            double_sided,
+            scene: Some(scene),
+        }
     }
+}
+
+/// What a raster draws of a triangle (`draw_kind` in the shader).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum DrawKind {
+    None,
+    All,
+    /// The fragments whose opacity reaches the cutoff.
+    Tested(f32),
+}
+
+/// As `draw_kind`: what the opaque raster (or, with `peel`, a peel) draws of triangle `t`.
+fn draw_kind(input: &RasterInput, t: usize, peel: bool) -> DrawKind {
+    let Some(scene) = input.scene else { return DrawKind::All };
+    let Some(m) = scene.triangle_materials.get(t).and_then(|&m| scene.materials.get(m as usize))
+    else {
+        return DrawKind::All;
+    };
+    match (m.alpha_mode, peel) {
+        (AlphaMode::Blend, true) => DrawKind::All,
+        (_, true) | (AlphaMode::Blend, false) => DrawKind::None,
+        (AlphaMode::Opaque, false) => DrawKind::All,
+        (AlphaMode::Mask { cutoff }, false) => {
+            if m.base_color_texture.is_some() {
+                DrawKind::Tested(cutoff)
+            } else if unit(m.base_color.w) >= cutoff {
+                DrawKind::All
+            } else {
+                DrawKind::None
+            }
+        }
+    }
+}
+
+/// As `unit`: `x` limited to [0, 1], NaN read as 0.
+fn unit(x: f32) -> f32 {
+    if x >= 0.0 { x.min(1.0) } else { 0.0 }
+}
+
+/// Calls `fragment(x, y, view depth, triangle)` for every fragment [`rasterize`] gives that the
+/// opaque raster (or, with `peel`, a peel) draws: the triangle's material allows it and, for a
+/// masked one with a texture, its opacity there reaches the cutoff.
+fn rasterize_drawn(
+    f: &FrameUniform,
+    input: &RasterInput,
+    peel: bool,
+    mut fragment: impl FnMut(u32, u32, f32, u32),
+) {
+    let kinds: Vec<DrawKind> =
+        (0..input.triangles.len()).map(|t| draw_kind(input, t, peel)).collect();
+    rasterize(f, input, |x, y, d, t| {
+        let drawn = match kinds[t as usize] {
+            DrawKind::None => false,
+            DrawKind::All => true,
+            DrawKind::Tested(cutoff) => input
+                .scene
+                .is_some_and(|scene| pixel_opacity(f, scene, t as usize, x, y, d) >= cutoff),
+        };
+        if drawn {
+            fragment(x, y, d, t);
+        }
+    });
 }
 
 /// Per triangle of `scene`: whether its material is double-sided.
@@ -268,7 +340,7 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
 /// Layer 0: the nearest fragment per pixel, ties to the smaller triangle id.
 pub fn raster_layer0(f: &FrameUniform, input: &RasterInput) -> Vec<u64> {
     let mut vis = vec![VIS_EMPTY; (f.width * f.height) as usize];
-    rasterize(f, input, |x, y, d, t| {
+    rasterize_drawn(f, input, false, |x, y, d, t| {
         let p = (y * f.width + x) as usize;
         vis[p] = vis[p].min(vis_pack(d, t));
     });
@@ -284,10 +356,30 @@ pub fn raster_layer1(
     reproject: bool,
 ) -> Vec<u64> {
     let mut vis = vec![VIS_EMPTY; (f.width * f.height) as usize];
-    rasterize(f, input, |x, y, d, t| {
+    rasterize_drawn(f, input, false, |x, y, d, t| {
         if layer1_accepts(f, zref, x, y, d, reproject) {
             let p = (y * f.width + x) as usize;
             vis[p] = vis[p].min(vis_pack(d, t));
+        }
+    });
+    vis
+}
+
+/// One transparency peel (the `PEEL` variant): per pixel the nearest fragment of a blended
+/// triangle whose word lies strictly behind `previous` (the last peel's words; `None` for the
+/// first peel) and strictly in front of `opaque` (layer 0).
+pub fn raster_peel(
+    f: &FrameUniform,
+    input: &RasterInput,
+    previous: Option<&[u64]>,
+    opaque: &[u64],
+) -> Vec<u64> {
+    let mut vis = vec![VIS_EMPTY; (f.width * f.height) as usize];
+    rasterize_drawn(f, input, true, |x, y, d, t| {
+        let p = (y * f.width + x) as usize;
+        let word = vis_pack(d, t);
+        if previous.is_none_or(|prev| word > prev[p]) && word < opaque[p] {
+            vis[p] = vis[p].min(word);
         }
     });
     vis

@@ -11,11 +11,12 @@ fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
-fn texel(t: &Texture, x: u32, y: u32, srgb: bool) -> Vec3 {
+/// As `texel`: rgb decoded from sRGB when `srgb` is set, alpha always linear.
+fn texel(t: &Texture, x: u32, y: u32, srgb: bool) -> Vec4 {
     let i = ((y * t.width + x) * 4) as usize;
-    Vec3::from_array(std::array::from_fn(|k| {
+    Vec4::from_array(std::array::from_fn(|k| {
         let c = f32::from(t.rgba8[i + k]) / 255.0;
-        if srgb { srgb_to_linear(c) } else { c }
+        if srgb && k < 3 { srgb_to_linear(c) } else { c }
     }))
 }
 
@@ -43,6 +44,11 @@ fn wrap_index(i: i32, n: i32, mode: Wrap) -> u32 {
 /// As `sample_texture`: texture `t` at `uv` (already transformed), wrapped and filtered as
 /// `slot` says; sRGB texels decoded before they are filtered.
 pub(crate) fn sample_texture(t: &Texture, slot: &TextureRef, uv: Vec2, srgb: bool) -> Vec3 {
+    sample_texture_rgba(t, slot, uv, srgb).xyz()
+}
+
+/// [`sample_texture`] with the alpha channel (linear).
+pub(crate) fn sample_texture_rgba(t: &Texture, slot: &TextureRef, uv: Vec2, srgb: bool) -> Vec4 {
     let size = Vec2::new(t.width as f32, t.height as f32);
     let r = Vec2::new(wrap_reduce(uv.x, slot.wrap_s), wrap_reduce(uv.y, slot.wrap_t));
     let (w, h) = (t.width as i32, t.height as i32);
@@ -199,24 +205,19 @@ pub(crate) fn normal_mapped(m: &Material, at: &Corners<'_>, n: Vec3) -> Vec3 {
     mapped / ml
 }
 
-/// The G-buffer sample of visibility word `word` at pixel (x, y).
-pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32) -> GSample {
-    let id = word as u32;
-    if word == VIS_EMPTY || id as usize >= scene.triangles.len() {
-        return GSample::default();
-    }
-    let d = f32::from_bits((word >> 32) as u32);
-    let [i0, i1, i2] = scene.triangles[id as usize].map(|i| i as usize);
-    let (w0, w1, w2) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
-    let a = mat_mul(&f.view, w0.extend(1.0).to_array()).xyz();
-    let b = mat_mul(&f.view, w1.extend(1.0).to_array()).xyz();
-    let c = mat_mul(&f.view, w2.extend(1.0).to_array()).xyz();
+/// As `pixel_ray`: the view-space ray (origin, direction) through the centre of pixel (x, y)
+/// towards view depth `d`.
+pub(crate) fn pixel_ray(f: &FrameUniform, x: u32, y: u32, d: f32) -> (Vec3, Vec3) {
     let target = view_position(f, Vec2::new(x as f32 + 0.5, y as f32 + 0.5), d);
-    let (origin, dir) = if f.ortho != 0 {
+    if f.ortho != 0 {
         (Vec3::new(target.x, target.y, 0.0), Vec3::NEG_Z)
     } else {
         (Vec3::ZERO, target)
-    };
+    }
+}
+
+/// As `ray_barycentrics`: where the ray meets the view-space triangle (a, b, c), clamped.
+pub(crate) fn ray_barycentrics(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     let (e1, e2) = (b - a, c - a);
     let pv = dir.cross(e2);
     let det = e1.dot(pv);
@@ -231,6 +232,54 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
             bary = raw / sum;
         }
     }
+    bary
+}
+
+/// As `pixel_opacity`: the opacity of triangle `id` of `scene` where the ray through pixel
+/// (x, y) meets it at view depth `d` (1 for a triangle without a material).
+pub(crate) fn pixel_opacity(
+    f: &FrameUniform,
+    scene: &Scene,
+    id: usize,
+    x: u32,
+    y: u32,
+    d: f32,
+) -> f32 {
+    let Some(m) = scene.triangle_materials.get(id).and_then(|&m| scene.materials.get(m as usize))
+    else {
+        return 1.0;
+    };
+    let tri = scene.triangles[id].map(|i| i as usize);
+    let view = |i: usize| mat_mul(&f.view, scene.positions[i].extend(1.0).to_array()).xyz();
+    let (origin, dir) = pixel_ray(f, x, y, d);
+    let bary = ray_barycentrics(origin, dir, view(tri[0]), view(tri[1]), view(tri[2]));
+    opacity(m, &Corners { scene, tri, bary })
+}
+
+/// As `material_opacity`: the material's opacity at a point (its base colour's alpha times its
+/// base-colour texture's), NaN read as 0.
+pub(crate) fn opacity(m: &Material, at: &Corners<'_>) -> f32 {
+    let mut a = m.base_color.w;
+    if let Some((t, slot, uv)) = at.read_slot(m.base_color_texture) {
+        a *= sample_texture_rgba(t, &slot, uv, true).w;
+    }
+    if a >= 0.0 { a.min(1.0) } else { 0.0 }
+}
+
+/// The G-buffer sample of visibility word `word` at pixel (x, y).
+pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32) -> GSample {
+    let id = word as u32;
+    if word == VIS_EMPTY || id as usize >= scene.triangles.len() {
+        return GSample::default();
+    }
+    let d = f32::from_bits((word >> 32) as u32);
+    let [i0, i1, i2] = scene.triangles[id as usize].map(|i| i as usize);
+    let (w0, w1, w2) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
+    let a = mat_mul(&f.view, w0.extend(1.0).to_array()).xyz();
+    let b = mat_mul(&f.view, w1.extend(1.0).to_array()).xyz();
+    let c = mat_mul(&f.view, w2.extend(1.0).to_array()).xyz();
+    let (origin, dir) = pixel_ray(f, x, y, d);
+    let bary = ray_barycentrics(origin, dir, a, b, c);
     let world = w0 * bary.x + w1 * bary.y + w2 * bary.z;
     let mut geo = (w1 - w0).cross(w2 - w0);
     let gl = geo.length();

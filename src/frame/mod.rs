@@ -21,7 +21,7 @@ pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
     AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform,
-    MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform,
+    MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform, TransparencyUniform,
 };
 
 /// A `#[repr(C)]` struct's size and field offsets, and the WGSL struct it mirrors.
@@ -72,6 +72,7 @@ pub const MIRRORED: &[MirrorLayout] = &[
     CompositeUniform::LAYOUT,
     DofUniform::LAYOUT,
     MotionBlurUniform::LAYOUT,
+    TransparencyUniform::LAYOUT,
     LevelUniform::LAYOUT,
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,
@@ -84,7 +85,7 @@ mirrored!(
     GpuMaterial,
     "shared/material.wgsl",
     "Material",
-    [base_color, emissive, roughness, metallic, reflectivity, flags, slots]
+    [base_color, emissive, roughness, metallic, reflectivity, flags, alpha_cutoff, slots]
 );
 mirrored!(
     GpuTextureSlot,

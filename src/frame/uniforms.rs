@@ -281,6 +281,18 @@ pub struct CompositeUniform {
 
 mirrored!(CompositeUniform, "composite.wgsl", "Composite", [ambient]);
 
+/// Mirrors `struct Transparency` in `wgsl/transparency.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TransparencyUniform {
+    /// The ambient radiance blended surfaces reflect (unoccluded).
+    pub ambient: [f32; 3],
+    /// Padding.
+    pub _pad: u32,
+}
+
+mirrored!(TransparencyUniform, "transparency.wgsl", "Transparency", [ambient]);
+
 /// Mirrors `struct MotionBlur` in `wgsl/motion_blur.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]

@@ -71,12 +71,6 @@ impl Stage for DirectStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Direct);
         let mut pass = rec.pass(id);
-        let mut defines = ctx.settings.precision.defines();
-        if ctx.shadows.is_some() {
-            defines.push("SHADOWS");
-        }
-        let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
-        // Layer 1's direct light feeds the radiosity and the reflections only.
         let plan = ctx.plan;
         let dof_layer1 = (plan.runs(Effect::Dof) && ctx.settings.dof.two_layers)
             || (plan.runs(Effect::MotionBlur) && ctx.settings.motion_blur.two_layers);
@@ -87,21 +81,39 @@ impl Stage for DirectStage {
             1
         };
         for layer in 0..layers {
-            let mut entries = vec![
-                (slot::FRAME, ctx.frame),
-                (slot::DIRECT, &self.uniform),
-                (slot::GBUFFER, ctx.gbuffer[layer]),
-                (slot::LIGHTS, ctx.scene.light_buffer()),
-                (slot::RADIANCE, &self.radiance[layer]),
-            ];
-            if let Some(s) = &ctx.shadows {
-                entries.extend([
-                    (slot::FACES, s.faces),
-                    (slot::LIGHT_FACES, s.light_faces),
-                    (slot::ATLAS, s.atlas),
-                ]);
-            }
-            pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+            self.light(ctx, &mut pass, ctx.gbuffer[layer], &self.radiance[layer]);
         }
+    }
+}
+
+impl DirectStage {
+    /// Records the direct light of G-buffer layer `gbuffer` into `radiance`.
+    pub(crate) fn light(
+        &self,
+        ctx: &FrameContext<'_>,
+        pass: &mut wgpu::ComputePass<'_>,
+        gbuffer: &wgpu::Buffer,
+        radiance: &wgpu::Buffer,
+    ) {
+        let mut defines = ctx.settings.precision.defines();
+        if ctx.shadows.is_some() {
+            defines.push("SHADOWS");
+        }
+        let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
+        let mut entries = vec![
+            (slot::FRAME, ctx.frame),
+            (slot::DIRECT, &self.uniform),
+            (slot::GBUFFER, gbuffer),
+            (slot::LIGHTS, ctx.scene.light_buffer()),
+            (slot::RADIANCE, radiance),
+        ];
+        if let Some(s) = &ctx.shadows {
+            entries.extend([
+                (slot::FACES, s.faces),
+                (slot::LIGHT_FACES, s.light_faces),
+                (slot::ATLAS, s.atlas),
+            ]);
+        }
+        pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
     }
 }

@@ -23,6 +23,7 @@ pub(crate) mod raster;
 pub(crate) mod reflections;
 pub(crate) mod resolve;
 pub(crate) mod shadow;
+pub(crate) mod transparency;
 pub(crate) mod upsample;
 
 use crate::SceneBuffers;
@@ -94,6 +95,8 @@ pub(crate) struct FrameContext<'a> {
     pub shadows: Option<direct::ShadowInputs<'a>>,
     /// Direct radiance of each layer.
     pub direct: [&'a wgpu::Buffer; 2],
+    /// The direct-light stage, which lights other G-buffers too (the transparency's peels).
+    pub lighting: &'a direct::DirectStage,
     /// The ambient visibility the composite reads, when obscurance runs.
     pub av: Option<&'a wgpu::Buffer>,
     /// The irradiance the composite reads, when radiosity runs.

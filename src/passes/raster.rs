@@ -32,6 +32,9 @@ pub(crate) enum RasterMode {
     },
     /// Count every covered fragment per pixel into a u32 buffer (watertightness tests).
     Count,
+    /// One transparency peel: blended triangles only, into `vis1`, the nearest fragment behind
+    /// `zref` (the previous peel) and in front of `opaque` (this frame's layer 0).
+    Peel,
 }
 
 impl RasterMode {
@@ -42,6 +45,7 @@ impl RasterMode {
             RasterMode::Both { reproject: false } => vec!["WRITE_L0", "WRITE_L1"],
             RasterMode::Both { reproject: true } => vec!["WRITE_L0", "WRITE_L1", "REPROJECT"],
             RasterMode::Count => vec!["COUNT"],
+            RasterMode::Peel => vec!["WRITE_L1", "PEEL"],
         }
     }
 }
@@ -80,12 +84,14 @@ pub(crate) struct Draw<'a> {
     pub zref: Option<&'a wgpu::Buffer>,
     /// Per-pixel fragment counts (Count).
     pub counts: Option<&'a wgpu::Buffer>,
+    /// The opaque layer 0 peeled fragments lie in front of (Peel).
+    pub opaque: Option<&'a wgpu::Buffer>,
 }
 
 impl<'a> Draw<'a> {
     /// A step drawn with `frame` in `mode`, its targets to be set.
     pub(crate) fn new(frame: &'a wgpu::Buffer, mode: RasterMode) -> Self {
-        Draw { frame, mode, vis0: None, vis1: None, zref: None, counts: None }
+        Draw { frame, mode, vis0: None, vis1: None, zref: None, counts: None, opaque: None }
     }
 }
 
@@ -192,12 +198,15 @@ impl Rasterizer {
             (slot::ITEMS, &self.items),
             (slot::ARGS, &self.args),
             (slot::TEXELS, &b.texels),
+            (slot::UVS, &b.uvs),
+            (slot::UVS1, &scene.uvs1),
         ];
         let optional = [
             (slot::VIS0, t.vis0),
             (slot::VIS1, t.vis1),
             (slot::ZREF, t.zref),
             (slot::COUNTS, t.counts),
+            (slot::OPAQUE, t.opaque),
         ];
         entries.extend(optional.into_iter().filter_map(|(s, b)| Some((s, b?))));
         let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));

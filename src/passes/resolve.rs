@@ -28,26 +28,36 @@ impl Stage for ResolveStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Resolve);
         let mut pass = rec.pass(id);
-        let defines = ctx.settings.precision.defines();
-        let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &[]);
-        let b = ctx.scene.buffers();
         let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
         for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
-            let entries = [
-                (slot::FRAME, ctx.frame),
-                (slot::POSITIONS, &b.positions),
-                (slot::NORMALS, &b.normals),
-                (slot::UVS, &b.uvs),
-                (slot::INDICES, &b.indices),
-                (slot::TRI_MATERIALS, &b.triangle_materials),
-                (slot::MATERIALS, &b.materials),
-                (slot::TEXELS, &b.texels),
-                (slot::VIS, vis),
-                (slot::GBUFFER, gbuffer),
-                (slot::UVS1, &ctx.scene.uvs1),
-                (slot::TANGENTS, &ctx.scene.tangents),
-            ];
-            pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+            resolve_layer(ctx, &mut pass, vis, gbuffer);
         }
     }
+}
+
+/// Records the resolve of visibility buffer `vis` into the G-buffer layer `gbuffer`.
+pub(crate) fn resolve_layer(
+    ctx: &FrameContext<'_>,
+    pass: &mut wgpu::ComputePass<'_>,
+    vis: &wgpu::Buffer,
+    gbuffer: &wgpu::Buffer,
+) {
+    let defines = ctx.settings.precision.defines();
+    let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &[]);
+    let b = ctx.scene.buffers();
+    let entries = [
+        (slot::FRAME, ctx.frame),
+        (slot::POSITIONS, &b.positions),
+        (slot::NORMALS, &b.normals),
+        (slot::UVS, &b.uvs),
+        (slot::INDICES, &b.indices),
+        (slot::TRI_MATERIALS, &b.triangle_materials),
+        (slot::MATERIALS, &b.materials),
+        (slot::TEXELS, &b.texels),
+        (slot::VIS, vis),
+        (slot::GBUFFER, gbuffer),
+        (slot::UVS1, &ctx.scene.uvs1),
+        (slot::TANGENTS, &ctx.scene.tangents),
+    ];
+    pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
 }

@@ -1,5 +1,6 @@
 //! Built-in scenes, by name: `cornell` (the public-domain Cornell box from `fixtures/cornell`,
-//! compiled into the binary) and `grid` / `grid-<triangles>` (a procedural field of tessellated
+//! compiled into the binary), `cornell-glass` (the same with two crossing tinted glass panes,
+//! blended) and `grid` / `grid-<triangles>` (a procedural field of tessellated
 //! spheres on a ground plane, for scaling to millions of triangles).
 
 use std::f32::consts::PI;
@@ -11,7 +12,7 @@ use super::{Camera, Light, LightKind, Material, MeshData, Projection, Scene};
 use crate::{Error, Result};
 
 /// The built-in scene names (`grid-<N>` takes any triangle count N).
-pub const NAMES: &[&str] = &["cornell", "grid", "grid-<triangles>"];
+pub const NAMES: &[&str] = &["cornell", "cornell-glass", "grid", "grid-<triangles>"];
 
 const CORNELL_OBJ: &str = include_str!("../../fixtures/cornell/CornellBox-Original.obj");
 const CORNELL_MTL: &str = include_str!("../../fixtures/cornell/CornellBox-Original.mtl");
@@ -29,8 +30,8 @@ pub fn by_name(name: &str, limits: &super::Limits) -> Result<Scene> {
         )))
     };
     let grid_size = match name {
-        "cornell" => {
-            let scene = cornell()?;
+        "cornell" | "cornell-glass" => {
+            let scene = if name == "cornell" { cornell()? } else { cornell_glass()? };
             let n = scene.triangle_count() as u64;
             return if n > limits.triangles { over(n) } else { Ok(scene) };
         }
@@ -74,6 +75,38 @@ pub fn cornell() -> Result<Scene> {
         intensity: 4.0,
         casts_shadows: true,
     });
+    Ok(scene)
+}
+
+/// The Cornell box with two blended glass panes leaning back between the camera and the boxes: a pale blue one (opacity 0.35) and, behind it and overlapping it, an orange one
+/// (opacity 0.5), so that some pixels see through two blended surfaces.
+pub fn cornell_glass() -> Result<Scene> {
+    let mut scene = cornell()?;
+    let panes = [
+        ("glass.blue", Vec4::new(0.3, 0.6, 1.0, 0.35), 0.5, (-0.8, 0.1), (0.1, 1.3)),
+        ("glass.orange", Vec4::new(1.0, 0.45, 0.15, 0.5), 0.2, (-0.3, 0.7), (0.3, 1.1)),
+    ];
+    for (name, base_color, z, (x0, x1), (y0, y1)) in panes {
+        scene.materials.push(Material {
+            name: name.into(),
+            base_color,
+            roughness: 0.3,
+            double_sided: true,
+            alpha_mode: super::AlphaMode::Blend,
+            ..Material::default()
+        });
+        let material = scene.materials.len() as u32 - 1;
+        // Leaning back by 40 degrees, towards the light.
+        let back = (y1 - y0) * 0.84;
+        let corners = [
+            Vec3::new(x0, y0, z),
+            Vec3::new(x1, y0, z),
+            Vec3::new(x1, y1, z - back),
+            Vec3::new(x0, y1, z - back),
+        ];
+        let n = Vec3::new(0.0, back, y1 - y0).normalize();
+        push(&mut scene, &corners, &[n; 4], &[0, 1, 2, 0, 2, 3], material);
+    }
     Ok(scene)
 }
 

@@ -15,8 +15,8 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::Mode;
 
 use super::{
-    Camera, Filter, Light, LightKind, Limits, MAX_TEXTURE_SIDE, Material, MeshData, Projection,
-    Scene, Texture, TextureRef, Wrap,
+    AlphaMode, Camera, Filter, Light, LightKind, Limits, MAX_TEXTURE_SIDE, Material, MeshData,
+    Projection, Scene, Texture, TextureRef, Wrap,
 };
 use crate::{Error, Result};
 
@@ -178,11 +178,6 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
     let mut texels_left = limits.texels;
     // What the file uses that the renderer does not read, with how many materials use each.
     let mut unread: std::collections::BTreeMap<String, usize> = Default::default();
-    for m in doc.materials() {
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            *unread.entry("alpha blending or masking".into()).or_default() += 1;
-        }
-    }
     for ext in doc.extensions_used().filter(|e| !READ_EXTENSIONS.contains(e)) {
         unread.insert(format!("the extension {ext}"), 0);
     }
@@ -245,6 +240,13 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
             occlusion_strength: occlusion.as_ref().map_or(1.0, |t| t.strength().clamp(0.0, 1.0)),
             reflectivity: metallic * (1.0 - roughness),
             double_sided: m.double_sided(),
+            alpha_mode: match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => {
+                    AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) }
+                }
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
         });
     }
     if coordinate_sets_above_1 > 0 {

@@ -20,6 +20,8 @@ pub struct SceneInfo {
     pub reflective: bool,
     /// Some material emits light.
     pub emissive: bool,
+    /// Some material is blended ([`AlphaMode::Blend`](super::AlphaMode::Blend)).
+    pub blended: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -35,6 +37,7 @@ impl SceneInfo {
                 m.reflectivity > 0.0 || (m.metallic_roughness_texture.is_some() && m.metallic > 0.0)
             }),
             emissive: scene.materials.iter().any(|m| m.emissive.max_element() > 0.0),
+            blended: scene.materials.iter().any(|m| m.alpha_mode == super::AlphaMode::Blend),
             bounds: scene.bounds(),
         }
     }

@@ -77,6 +77,26 @@ impl TextureRef {
     }
 }
 
+/// How a material's opacity (base colour alpha times the base-colour texture's alpha) is used:
+/// glTF's `alphaMode`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Opacity ignored: the surface is solid.
+    #[default]
+    Opaque,
+    /// Alpha test: where the opacity is below `cutoff` the surface is a hole (in both G-buffer
+    /// layers, the shadow maps and the ground truth); elsewhere it is solid.
+    Mask {
+        /// The opacity below which the surface is cut away (glTF `alphaCutoff`, default 0.5).
+        cutoff: f32,
+    },
+    /// Blended: the surface stays out of the opaque layers and the shadow maps; the nearest
+    /// [`TransparencySettings::layers`](crate::TransparencySettings) blended surfaces in front of
+    /// the opaque ones are peeled, shaded and composited over them (`C = a C_surface + (1 - a)
+    /// C_behind`).
+    Blend,
+}
+
 /// A surface material (the glTF 2.0 metallic-roughness model).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -115,6 +135,8 @@ pub struct Material {
     pub reflectivity: f32,
     /// Both faces are visible; otherwise back faces are culled.
     pub double_sided: bool,
+    /// How the opacity (`base_color.w` times the base-colour texture's alpha) is used.
+    pub alpha_mode: AlphaMode,
 }
 
 impl Material {
@@ -214,6 +236,11 @@ impl Material {
                 self.emissive
             ));
         }
+        if let AlphaMode::Mask { cutoff } = self.alpha_mode
+            && !(cutoff.is_finite() && cutoff >= 0.0)
+        {
+            return bad(&format!("alpha cutoff {cutoff} must be finite and >= 0"));
+        }
         if !self.normal_scale.is_finite() {
             return bad(&format!("normal scale {} must be finite", self.normal_scale));
         }
@@ -249,6 +276,7 @@ impl Default for Material {
             metallic: 0.0,
             reflectivity: 0.0,
             double_sided: false,
+            alpha_mode: AlphaMode::Opaque,
         }
     }
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::{Material, MeshData, Scene, Texture};
+use super::{AlphaMode, Material, MeshData, Scene, Texture};
 use crate::{Error, Result};
 
 /// Loads an OBJ file and the MTL libraries it names (paths relative to the OBJ's folder),
@@ -158,9 +158,25 @@ fn convert_material(
         }
         None => None,
     };
+    // Opacity: `d`, or else `1 - Tr`; a material that lets light through is blended.
+    let opacity = match (m.dissolve, m.unknown_param.get("Tr")) {
+        (Some(d), _) => d,
+        (None, Some(tr)) => {
+            let tr = tr.split_whitespace().next().and_then(|t| t.parse::<f32>().ok());
+            let Some(tr) = tr else {
+                return Err(Error::InvalidScene(format!(
+                    "material `{}`: Tr must be a number",
+                    m.name
+                )));
+            };
+            1.0 - tr
+        }
+        (None, None) => 1.0,
+    };
     Ok(Material {
         name: m.name.clone(),
-        base_color: Vec4::new(kd[0], kd[1], kd[2], m.dissolve.unwrap_or(1.0)),
+        base_color: Vec4::new(kd[0], kd[1], kd[2], opacity),
+        alpha_mode: if opacity < 1.0 { AlphaMode::Blend } else { AlphaMode::Opaque },
         base_color_texture: base_color_texture.map(super::TextureRef::new),
         emissive: Vec3::from(ke),
         roughness,

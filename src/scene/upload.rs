@@ -17,7 +17,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{Filter, GpuLight, Material, Scene, SceneInfo, TextureRef, Wrap};
+use super::{AlphaMode, Filter, GpuLight, Material, Scene, SceneInfo, TextureRef, Wrap};
 use crate::gpu::storage_buffer_init;
 use crate::{Error, Result};
 
@@ -56,10 +56,11 @@ pub struct GpuMaterial {
     pub metallic: f32,
     /// Mirror reflectivity.
     pub reflectivity: f32,
-    /// Bit 0: double-sided; bit `1 + k`: texture slot `k` is used (see [`SLOT_BASE_COLOR`]..).
+    /// Bit 0: double-sided; bit `1 + k`: texture slot `k` is used (see [`SLOT_BASE_COLOR`]..);
+    /// [`MATERIAL_MASK`], [`MATERIAL_BLEND`]: the alpha mode.
     pub flags: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// The opacity below which a masked material is cut away.
+    pub alpha_cutoff: f32,
     /// The texture slots: base colour (sRGB), emissive (sRGB), metallic-roughness (linear;
     /// green: roughness, blue: metallic; the reflectivity becomes metallic x (1 - roughness)
     /// per texel), normal (linear, tangent space), occlusion (linear, red).
@@ -71,6 +72,10 @@ const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 288);
 
 /// [`GpuMaterial::flags`] bit: both faces visible.
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
+/// [`GpuMaterial::flags`] bit: alpha-tested ([`AlphaMode::Mask`](super::AlphaMode::Mask)).
+pub const MATERIAL_MASK: u32 = 1 << 6;
+/// [`GpuMaterial::flags`] bit: blended ([`AlphaMode::Blend`](super::AlphaMode::Blend)).
+pub const MATERIAL_BLEND: u32 = 1 << 7;
 /// Index of the base-colour texture in [`GpuMaterial::slots`].
 pub const SLOT_BASE_COLOR: usize = 0;
 /// Index of the emissive texture.
@@ -124,6 +129,14 @@ impl GpuMaterial {
             flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
             ..GpuMaterial::default()
         };
+        match m.alpha_mode {
+            AlphaMode::Opaque => {}
+            AlphaMode::Mask { cutoff } => {
+                g.flags |= MATERIAL_MASK;
+                g.alpha_cutoff = cutoff;
+            }
+            AlphaMode::Blend => g.flags |= MATERIAL_BLEND,
+        }
         for (k, slot) in m.texture_slots().iter().enumerate() {
             if let Some(slot) = slot {
                 let scale = match k {

@@ -26,7 +26,7 @@ use crate::environment::Environment;
 use crate::frame::CameraMatrices;
 use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, vis_pack};
-use crate::scene::{Camera, GpuLight, Scene};
+use crate::scene::{AlphaMode, Camera, GpuLight, Scene};
 use crate::settings::AoSettings;
 use crate::{Error, Result};
 
@@ -38,6 +38,32 @@ pub struct Tracer {
     single_sided: Vec<bool>,
     /// A length on the scale of the scene (its bounds' diagonal), for ray offsets.
     scale: f32,
+    /// Per triangle: how its material's opacity is used.
+    alpha: Vec<AlphaMode>,
+    /// The scene, kept when some triangle's opacity must be read at its hits (a masked or
+    /// blended material).
+    translucent: Option<Box<Scene>>,
+}
+
+/// SplitMix64's finaliser: a well-mixed 64-bit hash.
+fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Barycentrics of `point` in the plane of triangle (a, b, c), clamped (the centroid for a
+/// degenerate triangle).
+fn plane_barycentrics(a: Vec3, b: Vec3, c: Vec3, point: Vec3) -> Vec3 {
+    let geo = (b - a).cross(c - a);
+    let area = geo.length_squared();
+    if area > 0.0 {
+        let u = (c - b).cross(point - b).dot(geo) / area;
+        let v = (a - c).cross(point - c).dot(geo) / area;
+        Vec3::new(u, v, 1.0 - u - v).clamp(Vec3::ZERO, Vec3::ONE)
+    } else {
+        Vec3::splat(1.0 / 3.0)
+    }
 }
 
 /// A ground-truth image: per pixel the estimate, its standard error (the estimate's own noise,
@@ -156,17 +182,70 @@ impl Tracer {
             obvhs::BvhBuildParams::medium_build(),
             &mut std::time::Duration::default(),
         );
-        Ok(Tracer { bvh, triangles, single_sided, scale })
+        let alpha: Vec<AlphaMode> = scene
+            .triangle_materials
+            .iter()
+            .map(|m| scene.materials.get(*m as usize).map_or(AlphaMode::Opaque, |m| m.alpha_mode))
+            .collect();
+        let translucent =
+            alpha.iter().any(|a| *a != AlphaMode::Opaque).then(|| Box::new(scene.clone()));
+        Ok(Tracer { bvh, triangles, single_sided, scale, alpha, translucent })
     }
 
-    /// The nearest hit along `origin + t dir` for t in (tmin, tmax): triangle index and t. With
+    /// Whether some triangle is blended (the full image then traces its primary rays through
+    /// them).
+    fn blends(&self) -> bool {
+        self.alpha.contains(&AlphaMode::Blend)
+    }
+
+    /// The opacity of triangle `index` at `point` on it.
+    fn opacity_at(&self, index: usize, point: Vec3) -> f32 {
+        let Some(scene) = self.translucent.as_deref() else { return 1.0 };
+        let tri = scene.triangles[index].map(|i| i as usize);
+        let [a, b, c] = tri.map(|i| scene.positions[i]);
+        let bary = plane_barycentrics(a, b, c, point);
+        let m = &scene.materials[scene.triangle_materials[index] as usize];
+        crate::cpu::resolve::opacity(m, &crate::cpu::resolve::Corners { scene, tri, bary })
+    }
+
+    /// Whether a ray meets triangle `index` at `point`: a masked surface where its opacity
+    /// reaches the cutoff; a blended one never without `key` (the opaque scene), else with
+    /// probability equal to its opacity (stochastic transparency: a uniform number from `key`
+    /// and the triangle, so each ray decides once per triangle).
+    fn meets(&self, index: usize, point: Vec3, key: Option<u64>) -> bool {
+        match (self.alpha[index], key) {
+            (AlphaMode::Opaque, _) => true,
+            (AlphaMode::Mask { cutoff }, _) => self.opacity_at(index, point) >= cutoff,
+            (AlphaMode::Blend, None) => false,
+            (AlphaMode::Blend, Some(key)) => {
+                let u = (mix64(key ^ mix64(index as u64)) >> 40) as f32 / (1u64 << 24) as f32;
+                u < self.opacity_at(index, point)
+            }
+        }
+    }
+
+    /// The nearest hit along `origin + t dir` for t in (tmin, tmax) on the opaque scene (masked
+    /// surfaces where they are solid; blended ones not at all): triangle index and t. With
     /// `cull`, back faces of single-sided triangles are not hit (as the rasterizer culls them).
     pub fn closest(
         &self,
         origin: Vec3,
         dir: Vec3,
+        range: (f32, f32),
+        cull: bool,
+    ) -> Option<(u32, f32)> {
+        self.closest_through(origin, dir, range, cull, None)
+    }
+
+    /// [`closest`](Tracer::closest), blended surfaces met with probability equal to their
+    /// opacity when `key` is given (a number the caller draws per ray).
+    pub fn closest_through(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
         (tmin, tmax): (f32, f32),
         cull: bool,
+        key: Option<u64>,
     ) -> Option<(u32, f32)> {
         let ray = Ray::new(origin.into(), dir.into(), tmin, tmax);
         let mut hit = RayHit::none();
@@ -179,7 +258,14 @@ impl Tracer {
                     return f32::INFINITY;
                 }
             }
-            tri.intersect(ray)
+            let t = tri.intersect(ray);
+            if t.is_finite()
+                && self.alpha[index] != AlphaMode::Opaque
+                && !self.meets(index, origin + dir * t, key)
+            {
+                return f32::INFINITY;
+            }
+            t
         });
         found.then(|| (self.bvh.primitive_indices[hit.primitive_id as usize], hit.t))
     }
@@ -322,17 +408,8 @@ impl Tracer {
     fn surface(&self, scene: &Scene, id: u32, point: Vec3, dir: Vec3) -> Surface {
         let [i0, i1, i2] = scene.triangles[id as usize].map(|i| i as usize);
         let (a, b, c) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
-        let geo = (b - a).cross(c - a);
-        // Barycentrics of the point in the triangle's plane.
-        let area = geo.length_squared();
-        let bary = if area > 0.0 {
-            let u = (c - b).cross(point - b).dot(geo) / area;
-            let v = (a - c).cross(point - c).dot(geo) / area;
-            Vec3::new(u, v, 1.0 - u - v).clamp(Vec3::ZERO, Vec3::ONE)
-        } else {
-            Vec3::splat(1.0 / 3.0)
-        };
-        let geo = geo.normalize_or(-dir);
+        let bary = plane_barycentrics(a, b, c, point);
+        let geo = (b - a).cross(c - a).normalize_or(-dir);
         let interp =
             scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
         let mut normal = interp.normalize_or(geo);
@@ -376,13 +453,23 @@ impl Tracer {
 
     /// Radiance the lights send from `s` at `point` towards `v` through the full BRDF (Lambert
     /// and GGX, as the direct pass), with shadow rays instead of shadow maps.
-    fn direct_radiance(&self, lights: &[GpuLight], s: &Surface, point: Vec3, v: Vec3) -> Vec3 {
+    fn direct_radiance(
+        &self,
+        lights: &[GpuLight],
+        s: &Surface,
+        point: Vec3,
+        v: Vec3,
+        rng: &mut ChaCha8Rng,
+    ) -> Vec3 {
         let origin = point + s.normal * (1e-5 * self.scale);
         let mut sum = Vec3::ZERO;
         for light in lights {
             let (e, l) = crate::cpu::direct::light_at(light, point);
             let nl = s.normal.dot(l);
-            if nl <= 0.0 || e.max_element() <= 0.0 || !self.unoccluded(light, origin, l) {
+            if nl <= 0.0
+                || e.max_element() <= 0.0
+                || !self.unoccluded(light, origin, l, Some(rng.random()))
+            {
                 continue;
             }
             let brdf =
@@ -392,14 +479,15 @@ impl Tracer {
         sum
     }
 
-    /// Whether nothing lies between `origin` and `light` along the unit direction `l`.
-    fn unoccluded(&self, light: &GpuLight, origin: Vec3, l: Vec3) -> bool {
+    /// Whether nothing lies between `origin` and `light` along the unit direction `l` (blended
+    /// surfaces let the light through stochastically with `key`, always without).
+    fn unoccluded(&self, light: &GpuLight, origin: Vec3, l: Vec3, key: Option<u64>) -> bool {
         let reach = if light.kind == 0 {
             f32::INFINITY
         } else {
             (Vec3::from(light.position) - origin).length()
         };
-        self.closest(origin, l, (0.0, reach), false).is_none()
+        self.closest_through(origin, l, (0.0, reach), false, key).is_none()
     }
 
     /// Radiance arriving at `origin` from the unit direction `w`: the sky's where nothing is
@@ -413,7 +501,9 @@ impl Tracer {
         depth: u32,
         rng: &mut ChaCha8Rng,
     ) -> Vec3 {
-        let Some((id, t)) = self.closest(origin, w, (0.0, f32::INFINITY), false) else {
+        let key = Some(rng.random());
+        let Some((id, t)) = self.closest_through(origin, w, (0.0, f32::INFINITY), false, key)
+        else {
             return light.sky(w);
         };
         let hit = origin + w * t;
@@ -437,7 +527,7 @@ impl Tracer {
         depth: u32,
         rng: &mut ChaCha8Rng,
     ) -> Vec3 {
-        let mut out = s.emission + self.direct_radiance(&light.lights, s, point, v);
+        let mut out = s.emission + self.direct_radiance(&light.lights, s, point, v, rng);
         if depth == 0 {
             return out;
         }
@@ -461,7 +551,7 @@ impl Tracer {
         for light in lights {
             let (e, l) = crate::cpu::direct::light_at(light, point);
             let nl = n.dot(l);
-            if nl > 0.0 && e.max_element() > 0.0 && self.unoccluded(light, origin, l) {
+            if nl > 0.0 && e.max_element() > 0.0 && self.unoccluded(light, origin, l, None) {
                 sum += e * nl;
             }
         }
@@ -609,7 +699,7 @@ impl Tracer {
         let camera = shot.camera;
         let (w, h) = shot.size;
         self.per_pixel(&f, scene, shot.seed, progress, |s, point, (x, y), rng| {
-            if motion.is_none() && !camera.lens.blurs() {
+            if motion.is_none() && !camera.lens.blurs() && !self.blends() {
                 let surface = Surface::of(s);
                 let v = towards_eye(&f, point);
                 return Some(sample_mean(spp, || {

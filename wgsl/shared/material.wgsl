@@ -19,9 +19,10 @@ struct Material {
     roughness: f32,
     metallic: f32,
     reflectivity: f32,
-    // bit 0: double-sided; bit 1 + k: texture slot k is used
+    // bit 0: double-sided; bit 1 + k: texture slot k is used; MATERIAL_MASK, MATERIAL_BLEND
     flags: u32,
-    _pad: u32,
+    // The opacity below which a masked material is cut away.
+    alpha_cutoff: f32,
     slots: array<TextureSlot, 5>,
 }
 
@@ -30,6 +31,9 @@ struct Material {
 const MAX_RADIANCE: f32 = 1e20;
 
 const MATERIAL_DOUBLE_SIDED: u32 = 1u;
+// Alpha modes (`MATERIAL_MASK`, `MATERIAL_BLEND` in src/scene/upload.rs).
+const MATERIAL_MASK: u32 = 64u;
+const MATERIAL_BLEND: u32 = 128u;
 // The texture slots, in the order of `Material::slots` (`SLOT_*` in src/scene/upload.rs).
 const SLOT_BASE_COLOR: u32 = 0u;
 const SLOT_EMISSIVE: u32 = 1u;
