@@ -85,6 +85,7 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
         ambient: Vec3::new(0.1, 0.2, 0.3),
         reflective: false,
         emissive: false,
+        blended: false,
         bounds: Some((Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
     };
     let scene = SceneBuffers::import(&device, buffers, info).unwrap();
@@ -290,6 +291,7 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             ambient: Vec3::splat(0.2),
             reflective: false,
             emissive: false,
+            blended: false,
             bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
         };
         SceneBuffers::import(&device, buffers, info).unwrap()

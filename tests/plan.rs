@@ -43,9 +43,10 @@ fn cornell_runs_everything_it_has() {
         [
             (Effect::Reflections, Reason::NotNeeded),
             (Effect::Dof, Reason::NotNeeded),
-            (Effect::MotionBlur, Reason::NotNeeded)
+            (Effect::MotionBlur, Reason::NotNeeded),
+            (Effect::Transparency, Reason::NotNeeded)
         ],
-        "no mirror in the box, its camera is a pinhole, and the shutter is closed"
+        "no mirror or glass in the box, its camera is a pinhole, and the shutter is closed"
     );
     assert_eq!(
         plan.passes,

@@ -20,7 +20,10 @@ pub struct SceneInfo {
     pub reflective: bool,
     /// Some material emits light.
     pub emissive: bool,
-    /// Some material is blended ([`AlphaMode::Blend`](super::AlphaMode::Blend)).
+    /// Some material is blended ([`AlphaMode::Blend`](super::AlphaMode::Blend); for imported
+    /// buffers: some material's flags hold [`MATERIAL_BLEND`](super::upload::MATERIAL_BLEND)).
+    /// Blended triangles are left out of the opaque layers, so without this set (and the
+    /// transparency passes it calls for) they are not drawn at all.
     pub blended: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.
