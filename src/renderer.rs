@@ -53,6 +53,10 @@ pub struct Diagnostics {
     /// Triangles drawn with their base colour alone because their material's texture does not
     /// lie inside the texel buffer (or has a zero size).
     pub untextured_triangles: u32,
+    /// Blended fragments in front of the opaque surfaces that lie behind the last transparency
+    /// peel ([`TransparencySettings::layers`](crate::TransparencySettings)): left out of the
+    /// image (what lies behind them shows through).
+    pub unpeeled_fragments: u32,
 }
 
 impl Diagnostics {
@@ -89,6 +93,11 @@ impl Diagnostics {
                 self.untextured_triangles,
                 "triangles' textures lie outside the texel buffer (drawn untextured)",
             ),
+            (
+                self.unpeeled_fragments,
+                "blended fragments lie behind the last transparency layer (left out; \
+                 --transparency-layers takes more)",
+            ),
         ]
         .into_iter()
         .filter(|(n, _)| *n > 0)
@@ -106,6 +115,7 @@ impl From<RasterCounters> for Diagnostics {
             rejected_materials: c.rejected_materials,
             rejected_positions: c.rejected_positions,
             untextured_triangles: c.untextured,
+            unpeeled_fragments: c.unpeeled,
         }
     }
 }

@@ -294,3 +294,32 @@ fn a_negative_alpha_cutoff_is_refused() {
     assert!(scene.validate().is_err());
     let _ = gpu();
 }
+
+/// Blended fragments behind the k-th peel are counted in the diagnostics (as many as the CPU
+/// finds), and none are once k covers every surface.
+#[test]
+fn fragments_beyond_the_last_peel_are_reported() {
+    let (scene, ..) = planes();
+    let (w, h) = (32, 24);
+    let g = gpu();
+    for (layers, some) in [(1, true), (2, false), (8, false)] {
+        let r = render(&scene, &camera(), settings(w, h, layers));
+        let d = r.renderer.diagnostics(&g.device, &g.queue).unwrap();
+        let ds = double_sided_triangles(&scene);
+        let input = RasterInput::new(&scene, &ds);
+        let behind = read4(&r.renderer, r.renderer.sharp_buffer().unwrap());
+        let inputs = TransparencyInputs {
+            frame: &r.frame,
+            scene: &scene,
+            opaque: &r.vis0,
+            layers,
+            shadows: None,
+            behind: &behind,
+        };
+        let peels = inputs.peels();
+        let expected = cpu::unpeeled_fragments(&r.frame, &input, peels.last().unwrap(), &r.vis0);
+        assert_eq!(d.unpeeled_fragments, expected, "k = {layers}");
+        assert_eq!(expected > 0, some, "k = {layers}: {expected}");
+        assert_eq!(d.warnings().is_empty(), !some, "{:?}", d.warnings());
+    }
+}

@@ -1,5 +1,5 @@
 // Software rasterization of both deep G-buffer layers into visibility buffers.
-// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 EARLY_TEST DEPTH_PHASE COUNT PEEL
+// defines: WRITE_L0 WRITE_L1 REPROJECT INT64 EARLY_TEST DEPTH_PHASE COUNT PEEL UNPEELED
 //
 // raster_small: one thread per input triangle: transform, clip against the near plane and the
 //   guard band (in homogeneous space), snap to 1/256-pixel fixed point, cull back faces, then
@@ -36,6 +36,8 @@
 // triangles only, into vis1: the nearest fragment whose word (depth, id) lies strictly behind
 // the previous peel's word in zref and strictly in front of the opaque layer 0 (`opaque`), so k
 // such steps peel the k nearest blended surfaces in front of the opaque ones, ties by id.
+// UNPEELED (with PEEL) writes nothing: it counts the fragments such a step would accept (those
+// behind the last peel) into the diagnostics, once (one phase on the 32-bit path too).
 
 #include "shared/frame.wgsl"
 #include "shared/material.wgsl"
@@ -101,6 +103,7 @@ struct Binned {
 #endif
 
 // Diagnostics words in `bins` (`RasterCounters` in src/frame/uniforms.rs).
+const DIAG_UNPEELED: u32 = 5u;
 const DIAG_INDEX: u32 = 8u;
 const DIAG_MATERIAL: u32 = 9u;
 const DIAG_POSITION: u32 = 10u;
@@ -329,7 +332,11 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32, tested: bool) {
 #endif
 #if WRITE_L1
     if layer1_accepts(pixel, d, t) {
+#if UNPEELED
+        atomicAdd(&bins[DIAG_UNPEELED], 1u);
+#else
         vis1_write(p, d, t);
+#endif
     }
 #endif
 }

@@ -385,6 +385,22 @@ pub fn raster_peel(
     vis
 }
 
+/// The fragments a peel after `last` would accept (the `UNPEELED` count).
+pub fn unpeeled_fragments(
+    f: &FrameUniform,
+    input: &RasterInput,
+    last: &[u64],
+    opaque: &[u64],
+) -> u32 {
+    let mut n = 0;
+    rasterize_drawn(f, input, true, |x, y, d, t| {
+        let p = (y * f.width + x) as usize;
+        let word = vis_pack(d, t);
+        n += u32::from(word > last[p] && word < opaque[p]);
+    });
+    n
+}
+
 /// How many fragments cover each pixel (the watertightness count).
 pub fn coverage_counts(f: &FrameUniform, input: &RasterInput) -> Vec<u32> {
     let mut counts = vec![0u32; (f.width * f.height) as usize];

@@ -481,8 +481,9 @@ pub struct RasterCounters {
     pub binned: u32,
     /// Work items (slices past a binned triangle's first) since the last `bin_args`.
     pub pending_items: u32,
-    /// Unused.
-    pub _unused0: u32,
+    /// Blended fragments in front of the opaque layer 0 behind the last transparency peel
+    /// (left out of the image; `DIAG_UNPEELED`).
+    pub unpeeled: u32,
     /// Work items of the current `raster_large` dispatch.
     pub items: u32,
     /// Unused.

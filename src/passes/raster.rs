@@ -35,6 +35,8 @@ pub(crate) enum RasterMode {
     /// One transparency peel: blended triangles only, into `vis1`, the nearest fragment behind
     /// `zref` (the previous peel) and in front of `opaque` (this frame's layer 0).
     Peel,
+    /// Counts the fragments a peel after `zref` would accept into the diagnostics.
+    Unpeeled,
 }
 
 impl RasterMode {
@@ -46,6 +48,7 @@ impl RasterMode {
             RasterMode::Both { reproject: true } => vec!["WRITE_L0", "WRITE_L1", "REPROJECT"],
             RasterMode::Count => vec!["COUNT"],
             RasterMode::Peel => vec!["WRITE_L1", "PEEL"],
+            RasterMode::Unpeeled => vec!["WRITE_L1", "PEEL", "UNPEELED"],
         }
     }
 }
@@ -184,8 +187,8 @@ impl Rasterizer {
         t: Draw<'_>,
     ) {
         let (frame, mode) = (t.frame, t.mode);
-        let phases: &[bool] =
-            if self.int64 || mode == RasterMode::Count { &[false] } else { &[true, false] };
+        let once = matches!(mode, RasterMode::Count | RasterMode::Unpeeled);
+        let phases: &[bool] = if self.int64 || once { &[false] } else { &[true, false] };
         let b = scene.buffers();
         let mut entries = vec![
             (slot::FRAME, frame),

@@ -118,6 +118,16 @@ impl Stage for TransparencyStage {
                     entries.push((slot::VIS, current));
                     accumulate.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
                 }
+                // What lies behind the last peel: counted, not drawn.
+                let layers = ctx.settings.transparency.layers as usize;
+                let step = Draw {
+                    vis1: Some(&self.peels[layers % 2]),
+                    zref: Some(&self.peels[1 - layers % 2]),
+                    opaque: Some(ctx.raster.vis0()),
+                    ..Draw::new(ctx.frame, RasterMode::Unpeeled)
+                };
+                let r = &ctx.raster.rasterizer;
+                r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
             }
             PassId::TransparencyComposite => {
                 let (Some(behind), image) = ctx.image_io(id) else {
