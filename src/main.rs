@@ -132,6 +132,10 @@ struct SweepArgs {
     /// aperture; the truth then samples the lens).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dof_samples))]
     dof_samples: Vec<u32>,
+    /// Transparency layers (peels) to sweep (the transparency runs when the scene has a
+    /// blended material; the truth blends stochastically).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().transparency_layers))]
+    transparency_layers: Vec<u32>,
     /// Layer separations Δz to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
@@ -778,6 +782,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_downsample: args.ao_downsample,
         radiosity_downsample: args.radiosity_downsample,
         dof_samples: args.dof_samples,
+        transparency_layers: args.transparency_layers,
         dz: args.dz,
         layer1: args.layer1,
         scale: args.scale,

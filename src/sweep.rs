@@ -30,6 +30,7 @@ use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
 use crate::settings::{
     AoEstimator, AoSettings, DofSettings, Layer1Variant, Precision, RadiositySettings, Settings,
+    TransparencySettings,
 };
 use crate::truth::metrics::{self, ErrorStats};
 use crate::truth::{Shot, Tracer, TruthImage};
@@ -64,6 +65,9 @@ pub struct Knobs {
     /// Rays through the lens per pixel ([`DofSettings::samples`]; the depth of field runs when
     /// the sweep's camera has an aperture).
     pub dof_samples: u32,
+    /// Blended surfaces peeled per pixel ([`TransparencySettings::layers`]; the transparency
+    /// runs when the scene has a blended material).
+    pub transparency_layers: u32,
     /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
     pub dz: f32,
     /// How layer 1 is rasterized.
@@ -92,6 +96,10 @@ impl Knobs {
                 ..AoSettings::default()
             },
             dof: DofSettings { samples: self.dof_samples, ..DofSettings::default() },
+            transparency: TransparencySettings {
+                layers: self.transparency_layers,
+                ..TransparencySettings::default()
+            },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
@@ -150,6 +158,8 @@ pub struct Grid {
     pub radiosity_downsample: Vec<u32>,
     /// Rays through the lens per pixel.
     pub dof_samples: Vec<u32>,
+    /// Transparency layers (peels).
+    pub transparency_layers: Vec<u32>,
     /// Layer separations.
     pub dz: Vec<f32>,
     /// Layer-1 variants.
@@ -174,6 +184,7 @@ impl Default for Grid {
             ao_downsample: vec![settings.ao.downsample],
             radiosity_downsample: vec![settings.radiosity.downsample],
             dof_samples: vec![settings.dof.samples],
+            transparency_layers: vec![settings.transparency.layers],
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
@@ -211,6 +222,7 @@ impl Grid {
             ao_downsample: settings.ao.downsample,
             radiosity_downsample: settings.radiosity.downsample,
             dof_samples: settings.dof.samples,
+            transparency_layers: settings.transparency.layers,
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
@@ -224,6 +236,7 @@ impl Grid {
         let k = times(k, &self.ao_downsample, |k, v| k.ao_downsample = v);
         let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
         let k = times(k, &self.dof_samples, |k, v| k.dof_samples = v);
+        let k = times(k, &self.transparency_layers, |k, v| k.transparency_layers = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -499,7 +512,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -520,7 +533,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -533,6 +546,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.ao_downsample,
             k.radiosity_downsample,
             k.dof_samples,
+            k.transparency_layers,
             k.dz,
             k.layer1,
             k.scale
@@ -582,7 +596,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 12] = [
+    let optional: [Column; 13] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
@@ -592,6 +606,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("AO downsample", |k| k.ao_downsample.to_string()),
         ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
         ("lens rays", |k| k.dof_samples.to_string()),
+        ("transparency layers", |k| k.transparency_layers.to_string()),
         ("Δz", |k| k.dz.to_string()),
         ("layer 1", |k| format!("{:?}", k.layer1)),
         ("scale", |k| k.scale.to_string()),

@@ -506,3 +506,60 @@ fn resize_between_frames() {
     r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     check_buffers(&r, &scene, "after refused resizes");
 }
+
+/// Transparency at its limits: up to twenty blended panes stacked in the Cornell box (two of
+/// them at the same depth, opacities 0, 1, tiny and in between, one emitting brightly) peeled 1
+/// and 16 (the most) layers deep: every buffer stays finite and in range, the image stays within
+/// what the panes and the box can send, and the fragments past the last peel are counted (none
+/// once k exceeds the panes).
+#[test]
+fn many_blended_layers_and_extreme_opacities() {
+    let (base, camera) = cornell();
+    let opacities = [0.0, 1.0, 1e-7, 0.5, 0.999_999];
+    for panes in [20, 10] {
+        let mut scene = base.clone();
+        for i in 0..panes {
+            let z = 0.9 - 0.07 * (i.min(panes - 2)) as f32;
+            let material = scene.materials.len() as u32;
+            scene.materials.push(deep_gbuffer::Material {
+                base_color: Vec4::new(0.8, 0.4, 0.2, opacities[i % opacities.len()]),
+                emissive: if i == 7 { Vec3::splat(1e4) } else { Vec3::ZERO },
+                alpha_mode: deep_gbuffer::AlphaMode::Blend,
+                double_sided: true,
+                ..Default::default()
+            });
+            let s = 0.3 + 0.02 * i as f32;
+            let positions = [
+                Vec3::new(-s, 1.0 - s, z),
+                Vec3::new(s, 1.0 - s, z),
+                Vec3::new(s, 1.0 + s, z),
+                Vec3::new(-s, 1.0 + s, z),
+            ];
+            let mesh = deep_gbuffer::scene::MeshData {
+                positions: &positions,
+                indices: &[0, 1, 2, 0, 2, 3],
+                material,
+                ..Default::default()
+            };
+            scene.push_mesh(mesh).unwrap();
+        }
+        let mut unpeeled = Vec::new();
+        for layers in [1, 16] {
+            let mut s = small();
+            s.transparency.layers = layers;
+            let what = format!("{panes} stacked blended panes, k = {layers}");
+            let c = check(&scene, &camera, s, 2, &what);
+            let image = read4(&c.renderer, c.renderer.hdr_buffer());
+            for (p, v) in image.iter().enumerate() {
+                assert!(
+                    v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.1e4,
+                    "{what}, pixel {p}: {v}"
+                );
+            }
+            let g = gpu();
+            unpeeled.push(c.renderer.diagnostics(&g.device, &g.queue).unwrap().unpeeled_fragments);
+        }
+        assert!(unpeeled[0] > unpeeled[1], "{panes} panes: {unpeeled:?}");
+        assert_eq!(unpeeled[1] == 0, panes <= 16, "{panes} panes: {unpeeled:?}");
+    }
+}

@@ -569,3 +569,30 @@ fn a_fitted_camera_sees_the_whole_scene() {
         fitted.validate().unwrap();
     }
 }
+
+/// glTF alpha modes: MASK with its cutoff (0.5 when the file gives none), BLEND, OPAQUE; a
+/// negative cutoff is refused by the validation every upload and tracer runs.
+#[test]
+fn gltf_alpha_modes_are_read() {
+    use deep_gbuffer::scene::AlphaMode;
+    let dir = temp_dir("alpha-gltf");
+    let with = |material: serde_json::Value| {
+        let mut doc = triangle_gltf();
+        doc["materials"] = serde_json::json!([material]);
+        doc["meshes"][0]["primitives"][0]["material"] = 0.into();
+        Scene::load(&write(&dir, "alpha.gltf", &doc.to_string()))
+    };
+    let mode = |m: serde_json::Value| with(m).unwrap().materials[0].alpha_mode;
+    assert_eq!(
+        mode(serde_json::json!({"alphaMode": "MASK", "alphaCutoff": 0.25})),
+        AlphaMode::Mask { cutoff: 0.25 }
+    );
+    assert_eq!(mode(serde_json::json!({"alphaMode": "MASK"})), AlphaMode::Mask { cutoff: 0.5 });
+    assert_eq!(mode(serde_json::json!({"alphaMode": "BLEND"})), AlphaMode::Blend);
+    assert_eq!(mode(serde_json::json!({})), AlphaMode::Opaque);
+    let loaded = with(serde_json::json!({"alphaMode": "BLEND"})).unwrap();
+    assert!(loaded.warnings.iter().all(|w| !w.contains("alpha")), "{:?}", loaded.warnings);
+    let negative = with(serde_json::json!({"alphaMode": "MASK", "alphaCutoff": -1.0})).unwrap();
+    let refused = error_text(negative.validate().map(|()| negative.clone()));
+    assert!(refused.contains("alpha cutoff"), "{refused}");
+}
