@@ -37,7 +37,9 @@
 // the previous peel's word in zref and strictly in front of the opaque layer 0 (`opaque`), so k
 // such steps peel the k nearest blended surfaces in front of the opaque ones, ties by id.
 // UNPEELED (with PEEL) writes nothing: it counts the fragments such a step would accept (those
-// behind the last peel) into the diagnostics, once (one phase on the 32-bit path too).
+// behind the last peel) into the diagnostics, once (one phase on the 32-bit path too). A peel
+// notes in bins[PEELED] that it found a fragment; `peel_dispatch` turns that into the indirect
+// arguments of the peel's per-pixel kernels (none when it found nothing) and clears it.
 
 #include "shared/frame.wgsl"
 #include "shared/material.wgsl"
@@ -100,10 +102,13 @@ struct Binned {
 #if PEEL
 // This frame's opaque layer 0: peeled fragments lie in front of it.
 @group(0) @binding(16) var<storage, read> opaque: array<u32>;
+// The workgroups of the peel's per-pixel kernels (8x8 pixels each), or none.
+@group(0) @binding(17) var<storage, read_write> peel_args: array<u32>;
 #endif
 
 // Diagnostics words in `bins` (`RasterCounters` in src/frame/uniforms.rs).
 const DIAG_UNPEELED: u32 = 5u;
+const PEELED: u32 = 7u;
 const DIAG_INDEX: u32 = 8u;
 const DIAG_MATERIAL: u32 = 9u;
 const DIAG_POSITION: u32 = 10u;
@@ -336,6 +341,9 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32, tested: bool) {
         atomicAdd(&bins[DIAG_UNPEELED], 1u);
 #else
         vis1_write(p, d, t);
+#if PEEL
+        atomicStore(&bins[PEELED], 1u);
+#endif
 #endif
     }
 #endif
@@ -601,4 +609,14 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
             }
         }
     }
+}
+
+@compute @workgroup_size(1)
+fn peel_dispatch() {
+#if PEEL
+    let found = atomicExchange(&bins[PEELED], 0u) != 0u;
+    peel_args[0] = select(0u, (frame.width + 7u) / 8u, found);
+    peel_args[1] = select(0u, (frame.height + 7u) / 8u, found);
+    peel_args[2] = 1u;
+#endif
 }

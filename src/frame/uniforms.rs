@@ -486,8 +486,8 @@ pub struct RasterCounters {
     pub unpeeled: u32,
     /// Work items of the current `raster_large` dispatch.
     pub items: u32,
-    /// Unused.
-    pub _unused1: u32,
+    /// Whether the last transparency peel found a fragment (cleared by `peel_dispatch`).
+    pub peeled: u32,
     /// Triangles rejected for a vertex index past the vertex count (`DIAG_INDEX`).
     pub rejected_indices: u32,
     /// Triangles rejected for a material id past the material count (`DIAG_MATERIAL`).

@@ -81,19 +81,21 @@ impl Stage for DirectStage {
             1
         };
         for layer in 0..layers {
-            self.light(ctx, &mut pass, ctx.gbuffer[layer], &self.radiance[layer]);
+            self.light(ctx, &mut pass, ctx.gbuffer[layer], &self.radiance[layer], None);
         }
     }
 }
 
 impl DirectStage {
-    /// Records the direct light of G-buffer layer `gbuffer` into `radiance`.
+    /// Records the direct light of G-buffer layer `gbuffer` into `radiance`, over the whole
+    /// image or with the workgroups `args` holds (8x8 pixels each).
     pub(crate) fn light(
         &self,
         ctx: &FrameContext<'_>,
         pass: &mut wgpu::ComputePass<'_>,
         gbuffer: &wgpu::Buffer,
         radiance: &wgpu::Buffer,
+        args: Option<&wgpu::Buffer>,
     ) {
         let mut defines = ctx.settings.precision.defines();
         if ctx.shadows.is_some() {
@@ -114,6 +116,9 @@ impl DirectStage {
                 (slot::ATLAS, s.atlas),
             ]);
         }
-        pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
+        match args {
+            Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
+            None => pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size()),
+        }
     }
 }

@@ -89,12 +89,23 @@ pub(crate) struct Draw<'a> {
     pub counts: Option<&'a wgpu::Buffer>,
     /// The opaque layer 0 peeled fragments lie in front of (Peel).
     pub opaque: Option<&'a wgpu::Buffer>,
+    /// Where a peel writes the indirect arguments of its per-pixel kernels (Peel).
+    pub peel_args: Option<&'a wgpu::Buffer>,
 }
 
 impl<'a> Draw<'a> {
     /// A step drawn with `frame` in `mode`, its targets to be set.
     pub(crate) fn new(frame: &'a wgpu::Buffer, mode: RasterMode) -> Self {
-        Draw { frame, mode, vis0: None, vis1: None, zref: None, counts: None, opaque: None }
+        Draw {
+            frame,
+            mode,
+            vis0: None,
+            vis1: None,
+            zref: None,
+            counts: None,
+            opaque: None,
+            peel_args: None,
+        }
     }
 }
 
@@ -210,11 +221,13 @@ impl Rasterizer {
             (slot::ZREF, t.zref),
             (slot::COUNTS, t.counts),
             (slot::OPAQUE, t.opaque),
+            (slot::PEEL_ARGS, t.peel_args),
         ];
         entries.extend(optional.into_iter().filter_map(|(s, b)| Some((s, b?))));
         let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
+        let mut defines = Vec::new();
         for &depth_phase in phases {
-            let mut defines = mode.defines();
+            defines = mode.defines();
             if self.int64 {
                 defines.push("INT64");
                 if self.early_test {
@@ -228,6 +241,11 @@ impl Rasterizer {
             get("raster_small").dispatch(device, pass, &entries, groups);
             get("bin_args").dispatch(device, pass, &entries, (1, 1));
             get("raster_large").dispatch_indirect(device, pass, &entries, &self.args, 0);
+        }
+        if mode == RasterMode::Peel && t.peel_args.is_some() {
+            let p =
+                pipelines.get(device, "raster", "peel_dispatch", &defines, &self.work.constants());
+            p.dispatch(device, pass, &entries, (1, 1));
         }
     }
 

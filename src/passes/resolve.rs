@@ -30,17 +30,19 @@ impl Stage for ResolveStage {
         let mut pass = rec.pass(id);
         let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
         for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
-            resolve_layer(ctx, &mut pass, vis, gbuffer);
+            resolve_layer(ctx, &mut pass, vis, gbuffer, None);
         }
     }
 }
 
-/// Records the resolve of visibility buffer `vis` into the G-buffer layer `gbuffer`.
+/// Records the resolve of visibility buffer `vis` into the G-buffer layer `gbuffer`, over the
+/// whole image or with the workgroups `args` holds (8x8 pixels each).
 pub(crate) fn resolve_layer(
     ctx: &FrameContext<'_>,
     pass: &mut wgpu::ComputePass<'_>,
     vis: &wgpu::Buffer,
     gbuffer: &wgpu::Buffer,
+    args: Option<&wgpu::Buffer>,
 ) {
     let defines = ctx.settings.precision.defines();
     let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &[]);
@@ -59,5 +61,8 @@ pub(crate) fn resolve_layer(
         (slot::UVS1, &ctx.scene.uvs1),
         (slot::TANGENTS, &ctx.scene.tangents),
     ];
-    pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
+    match args {
+        Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
+        None => pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size()),
+    }
 }

@@ -24,6 +24,8 @@ pub(crate) struct TransparencyStage {
     radiance: wgpu::Buffer,
     /// C (rgb) and A (a) per pixel.
     accum: wgpu::Buffer,
+    /// The workgroups of the current peel's per-pixel kernels (none when it found nothing).
+    args: wgpu::Buffer,
     empty: Fill,
 }
 
@@ -50,6 +52,12 @@ impl TransparencyStage {
             ),
             radiance: buffer("deep-gbuffer.transparency.radiance", pixels * 16),
             accum: buffer("deep-gbuffer.transparency.accum", pixels * 16),
+            args: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.transparency.args",
+                16,
+                wgpu::BufferUsages::INDIRECT,
+            ),
         }
     }
 
@@ -106,17 +114,22 @@ impl Stage for TransparencyStage {
                         vis1: Some(current),
                         zref: Some(previous),
                         opaque: Some(ctx.raster.vis0()),
+                        peel_args: Some(&self.args),
                         ..Draw::new(ctx.frame, RasterMode::Peel)
                     };
                     let r = &ctx.raster.rasterizer;
                     r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
-                    super::resolve::resolve_layer(ctx, &mut pass, current, &self.gbuffer);
+                    // A peel that found nothing costs its raster alone: the kernels below get
+                    // no workgroups.
+                    let args = Some(&self.args);
+                    super::resolve::resolve_layer(ctx, &mut pass, current, &self.gbuffer, args);
                     if ctx.plan.runs(Effect::Direct) {
-                        ctx.lighting.light(ctx, &mut pass, &self.gbuffer, &self.radiance);
+                        let (g, out) = (&self.gbuffer, &self.radiance);
+                        ctx.lighting.light(ctx, &mut pass, g, out, args);
                     }
                     entries.retain(|(s, _)| *s != slot::VIS);
                     entries.push((slot::VIS, current));
-                    accumulate.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+                    accumulate.dispatch_indirect(ctx.device, &mut pass, &entries, &self.args, 0);
                 }
                 // What lies behind the last peel: counted, not drawn.
                 let layers = ctx.settings.transparency.layers as usize;
