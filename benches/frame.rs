@@ -10,8 +10,10 @@
 //! - `resolution`: every pass of the Cornell frame from 256x256 to 3840x2160; the slope of each
 //!   per-pixel pass is milliseconds per megapixel (the shadow maps do not depend on it). A size
 //!   the device cannot hold is listed with the error it gets.
+//! - `transparency`: the GI frame of `builtin:cornell-glass` (two blended panes) peeled 1 and 4
+//!   layers deep at the `passes` sizes: what the transparency passes cost.
 //!
-//! Environment: `DEEP_GBUFFER_BENCH_GROUPS` (default `passes,triangles,resolution`),
+//! Environment: `DEEP_GBUFFER_BENCH_GROUPS` (default `passes,triangles,resolution,transparency`),
 //! `DEEP_GBUFFER_BENCH_SCENES` (default `cornell,grid-100000`), `DEEP_GBUFFER_BENCH_SIZES`
 //! (default `256x256,1920x1080`), `DEEP_GBUFFER_BENCH_TRIANGLES` (default
 //! `1000,10000,100000,1000000,5000000`), `DEEP_GBUFFER_BENCH_RESOLUTIONS` (default
@@ -228,10 +230,46 @@ fn resolution(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
     out.push('\n');
 }
 
+fn transparency(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
+    let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
+    let scene = common::load("cornell-glass");
+    let camera = scene.camera_or_default();
+    let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
+    let _ = writeln!(out, "## Transparency (Cornell box with two blended panes, full GI frame)\n");
+    let _ = writeln!(
+        out,
+        "| size | layers (k) | `transparency.peel` ms | `transparency.composite` ms | frame ms |\n|---|---:|---:|---:|---:|"
+    );
+    for &(w, h) in &sizes {
+        for layers in [1, 4] {
+            let mut settings = Settings::with_size(w, h);
+            settings.transparency.layers = layers;
+            let group = format!("transparency/{w}x{h}");
+            match bench_frames(c, gpu, &group, &format!("k{layers}"), &buffers, &camera, settings) {
+                Ok(t) if t.frames > 0 => {
+                    let _ = writeln!(
+                        out,
+                        "| {w}x{h} | {layers} | {:.2} | {:.2} | {:.2} |",
+                        t.mean("transparency.peel"),
+                        t.mean("transparency.composite"),
+                        t.frame()
+                    );
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    let _ = writeln!(out, "| {w}x{h} | {layers} | {e} | | |");
+                }
+            }
+        }
+    }
+    out.push('\n');
+}
+
 fn main() {
     let gpu = Gpu::new(&GpuOptions::default(), &deep_gbuffer::Renderer::requirements())
         .expect("a GPU adapter (or lavapipe) for the benchmarks");
-    let groups = common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution");
+    let groups =
+        common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution,transparency");
     let mut c = Criterion::default().configure_from_args();
     let mut out = format!(
         "Device: {}\nAt the start: {}\n\n",
@@ -243,6 +281,7 @@ fn main() {
             "passes" => passes(&mut c, &gpu, &mut out),
             "triangles" => triangles(&mut c, &gpu, &mut out),
             "resolution" => resolution(&mut c, &gpu, &mut out),
+            "transparency" => transparency(&mut c, &gpu, &mut out),
             other => panic!("DEEP_GBUFFER_BENCH_GROUPS: unknown group {other}"),
         }
     }
