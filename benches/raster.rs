@@ -100,11 +100,14 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2));
 
-    let variants: [(&str, Layer1Variant, Precision, &str); 7] = [
+    let variants: [(&str, Layer1Variant, Precision, &str); 9] = [
         ("raster.layer0", Layer1Variant::TwoPass, Precision::Full, "raster.layer0"),
         ("raster.layer1 two-pass", Layer1Variant::TwoPass, Precision::Full, "raster.layer1"),
         ("raster.layers previous", Layer1Variant::Previous, Precision::Full, "raster.layers"),
         ("raster.layers reproject", Layer1Variant::Reproject, Precision::Full, "raster.layers"),
+        // Predict and Delay: one pass for both layers, plus the next frame's layer 0.
+        ("raster.layers predict", Layer1Variant::Predict, Precision::Full, "raster.layers"),
+        ("raster.next predict", Layer1Variant::Predict, Precision::Full, "raster.next"),
         ("resolve full", Layer1Variant::TwoPass, Precision::Full, "resolve"),
         ("resolve packed", Layer1Variant::TwoPass, Precision::Packed, "resolve"),
         ("raster.clear", Layer1Variant::TwoPass, Precision::Full, "raster.clear"),

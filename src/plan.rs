@@ -24,6 +24,9 @@ pub enum PassId {
     RasterLayer1,
     /// Rasterizes both layers in one pass against the previous frame's layer 0.
     RasterLayers,
+    /// Rasterizes layer 0 for the next frame's layer-1 test (`Predict`: from the predicted
+    /// camera; `Delay`: from the camera the next frame shows).
+    RasterNext,
     /// Visibility buffers to G-buffer attributes.
     Resolve,
     /// The depth pyramid of each layer obscurance reads.
@@ -80,11 +83,12 @@ pub(crate) enum StageId {
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 18] = [
+    pub const FIXED: [PassId; 19] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
         PassId::RasterLayers,
+        PassId::RasterNext,
         PassId::Resolve,
         PassId::Pyramid,
         PassId::Ao,
@@ -108,6 +112,7 @@ impl PassId {
             PassId::RasterLayer0 => "raster.layer0",
             PassId::RasterLayer1 => "raster.layer1",
             PassId::RasterLayers => "raster.layers",
+            PassId::RasterNext => "raster.next",
             PassId::Resolve => "resolve",
             PassId::Pyramid => "pyramid",
             PassId::Ao => "ao",
@@ -157,7 +162,8 @@ impl PassId {
             PassId::RasterClear
             | PassId::RasterLayer0
             | PassId::RasterLayer1
-            | PassId::RasterLayers => StageId::Raster,
+            | PassId::RasterLayers
+            | PassId::RasterNext => StageId::Raster,
             PassId::Resolve => StageId::Resolve,
             PassId::Pyramid | PassId::Ao | PassId::AoBlur => StageId::Ao,
             PassId::Shadow { .. } => StageId::Shadows,
@@ -396,6 +402,9 @@ impl Plan {
         let mut passes = vec![PassId::RasterClear];
         if layers == 2 && settings.layer1 != Layer1Variant::TwoPass {
             passes.push(PassId::RasterLayers);
+            if matches!(settings.layer1, Layer1Variant::Predict | Layer1Variant::Delay) {
+                passes.push(PassId::RasterNext);
+            }
         } else {
             passes.push(PassId::RasterLayer0);
             if layers == 2 {

@@ -275,6 +275,11 @@ pub struct Renderer {
     present: Present,
     /// The last frame's camera (`None`: the next frame is a first frame).
     history: Option<CameraMatrices>,
+    /// [`Layer1Variant::Delay`](crate::Layer1Variant::Delay): the camera the last call was
+    /// given, which the next frame shows.
+    pending: Option<Camera>,
+    /// The camera the last frame's image shows.
+    image_camera: Option<Camera>,
     timestamps: Option<Timestamps>,
     /// The last frame: its constants, its plan and the passes recorded.
     last_frame: Option<FrameUniform>,
@@ -401,6 +406,8 @@ impl Renderer {
             stages: Stages::new(device, &settings, int64),
             present: Present::new(),
             history: None,
+            pending: None,
+            image_camera: None,
             timestamps: if settings.timings {
                 Timestamps::new(device, queue, MAX_TIMED_PASSES)
             } else {
@@ -569,6 +576,11 @@ impl Renderer {
         provided: bool,
     ) -> Result<()> {
         camera.validate()?;
+        // With one frame of latency the frame shows the camera given the call before.
+        let given = camera;
+        let delayed = self.settings.layer1 == crate::Layer1Variant::Delay;
+        let shown = if delayed { self.pending.clone() } else { None };
+        let camera = shown.as_ref().unwrap_or(given);
         let mut plan = self.plan(scene, camera);
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
@@ -579,7 +591,7 @@ impl Renderer {
                 plan.left_out.push((Effect::Transparency, crate::plan::Reason::NotNeeded));
             }
         }
-        let current = self.prepare(device, queue, scene, camera, &plan)?;
+        let current = self.prepare(device, queue, scene, (camera, given), &plan)?;
         let stages = &self.stages;
         let ctx = stages.context(FrameInputs {
             device,
@@ -604,17 +616,29 @@ impl Renderer {
         }
         self.plan = Some(plan);
         self.history = Some(current);
+        self.image_camera = Some(camera.clone());
+        if delayed {
+            self.pending = Some(given.clone());
+        }
         Ok(())
     }
 
+    /// The camera the last frame's image shows: the one it was given, or with
+    /// [`Layer1Variant::Delay`](crate::Layer1Variant::Delay) the one given the frame before
+    /// (`None` before the first frame).
+    pub fn image_camera(&self) -> Option<&Camera> {
+        self.image_camera.as_ref()
+    }
+
     /// Writes the frame's constants and makes every stage `plan` needs ready for it; returns
-    /// this frame's camera matrices.
+    /// this frame's camera matrices. `camera` is the one the frame shows, `given` the one it was
+    /// given (they differ with one frame of latency).
     fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: &SceneBuffers,
-        camera: &Camera,
+        (camera, given): (&Camera, &Camera),
         plan: &Plan,
     ) -> Result<CameraMatrices> {
         let s = &self.settings;
@@ -627,8 +651,21 @@ impl Renderer {
         };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
         self.last_frame = Some(uniform);
+        // The layer 0 the next frame's layer 1 is tested against: from the camera that frame
+        // will show (Delay) or from this one moved again as it moved since the last (Predict).
+        let next = plan.contains(&PassId::RasterNext).then(|| {
+            let (w, h) = (s.width, s.height);
+            if s.layer1 == crate::Layer1Variant::Delay {
+                let m = CameraMatrices::new(given, w, h);
+                FrameUniform::new(given, m, m, w, h, s.dz, counts)
+            } else {
+                let view = current.view * previous.view.inverse() * current.view;
+                let m = CameraMatrices { view, proj: current.proj };
+                FrameUniform::new(camera, m, current, w, h, s.dz, counts)
+            }
+        });
         let st = &mut self.stages;
-        st.raster.prepare(device, scene);
+        st.raster.prepare(device, queue, scene, next.as_ref());
         if plan.runs(Effect::Shadows) {
             let shadows = ShadowStage::for_plan(st.shadows.take(), device, s, scene, plan)?;
             shadows.prepare(queue, scene);

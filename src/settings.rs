@@ -19,6 +19,18 @@ pub enum Layer1Variant {
     /// One pass, layer 1 against the previous frame's layer 0 at the fragment's reprojected
     /// position (as in the paper).
     Reproject,
+    /// One pass, layer 1 against a layer 0 the frame before drew from this frame's predicted
+    /// camera: the last camera motion repeated (view matrix `V_t V_{t-1}^-1 V_t`; exact for a
+    /// camera moving at constant linear and angular velocity). Costs a layer-0 raster per frame
+    /// (`raster.next`); geometry is predicted to stay where it is.
+    Predict,
+    /// One pass with one frame of latency: each frame draws the layer 0 of the camera it is
+    /// given (`raster.next`) and shows the camera given the frame before, whose layer 0 is then
+    /// known exactly, so layer 1 is the two-pass one. The image of a frame belongs to the camera
+    /// before ([`Renderer::image_camera`](crate::Renderer::image_camera) says which; the first
+    /// frame shows its own camera, the second that one again). Moving objects must be moved a
+    /// frame late too for the separation to stay exact.
+    Delay,
 }
 
 /// How the G-buffer stores its attributes.

@@ -126,6 +126,13 @@ impl Knobs {
         if !(1..=2).contains(&self.layers) {
             return Err(Error::setting("layers", format!("{} (1 or 2)", self.layers)));
         }
+        if self.layer1 == Layer1Variant::Delay {
+            return Err(Error::setting(
+                "layer1",
+                "delay (its image shows the camera of the frame before, not the one the truth \
+                 is traced from; compare its layers with `render --layer1 delay`)",
+            ));
+        }
         let (w, h) = self.size(width, height);
         self.settings(w, h).validate()
     }

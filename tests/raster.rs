@@ -308,7 +308,12 @@ fn one_pass_variants_equal_two_pass_on_a_static_camera() {
     let (scene, camera) = cornell();
     let base = Settings { dz: 0.05, ..settings(96, 72) };
     let exact = render(&scene, &camera, base.clone());
-    for layer1 in [Layer1Variant::Previous, Layer1Variant::Reproject] {
+    for layer1 in [
+        Layer1Variant::Previous,
+        Layer1Variant::Reproject,
+        Layer1Variant::Predict,
+        Layer1Variant::Delay,
+    ] {
         let r = render_frames(
             &scene,
             &[camera.clone(), camera.clone()],
@@ -512,7 +517,9 @@ fn imported_buffers_are_checked_against_their_counts() {
 /// Under motion the one-pass variants test layer 1 against the previous frame's layer 0, so they
 /// differ from the exact two-pass layer 1 where the view changed. Measured at three orbit speeds
 /// (printed); slow motion must stay close to two-pass, and reprojecting must never be worse than
-/// reusing the same pixel.
+/// reusing the same pixel. A steady orbit is what `Predict` extrapolates exactly (to the
+/// rounding of its matrices), and `Delay`, which shows the camera before the last, is the
+/// two-pass layer 1 of that camera bit for bit.
 #[test]
 fn one_pass_variants_under_motion() {
     let (scene, start) = cornell();
@@ -530,7 +537,7 @@ fn one_pass_variants_under_motion() {
             .collect();
         let exact = render(&scene, cameras.last().unwrap(), base.clone());
         let mut fractions = Vec::new();
-        for layer1 in [Layer1Variant::Previous, Layer1Variant::Reproject] {
+        for layer1 in [Layer1Variant::Previous, Layer1Variant::Reproject, Layer1Variant::Predict] {
             let r = render_frames(&scene, &cameras, Settings { layer1, ..base.clone() });
             assert_eq!(r.vis0, exact.vis0, "layer 0 does not depend on the variant");
             let (n, _) = mismatches(&r.vis1, &exact.vis1, 96);
@@ -550,5 +557,18 @@ fn one_pass_variants_under_motion() {
             fractions[1],
             fractions[0]
         );
+        assert!(fractions[2] < 0.001, "{step} degrees: predict {}", fractions[2]);
+        let delayed = render_frames(
+            &scene,
+            &cameras,
+            Settings { layer1: Layer1Variant::Delay, ..base.clone() },
+        );
+        let shown = &cameras[cameras.len() - 2];
+        assert_eq!(delayed.renderer.image_camera(), Some(shown), "one frame late");
+        let exact = render(&scene, shown, base.clone());
+        assert_eq!(delayed.vis0, exact.vis0, "{step} degrees: the delayed layer 0");
+        assert_eq!(delayed.vis1, exact.vis1, "{step} degrees: the delayed layer 1 is exact");
+        let plan = delayed.renderer.last_plan().unwrap();
+        assert!(plan.contains(&PassId::RasterLayers) && plan.contains(&PassId::RasterNext));
     }
 }

@@ -266,6 +266,10 @@ pub(crate) struct RasterStage {
     pub(crate) rasterizer: Rasterizer,
     vis0: [wgpu::Buffer; 2],
     vis1: wgpu::Buffer,
+    /// The layer 0 `raster.next` drew for the next frame (`Predict`, `Delay`), and the frame
+    /// uniform of the camera it drew from.
+    next: wgpu::Buffer,
+    next_frame: wgpu::Buffer,
     /// Which `vis0` holds this (or, between frames, the last) frame's layer 0.
     current: usize,
     fill: Fill,
@@ -280,16 +284,28 @@ impl RasterStage {
         RasterStage {
             rasterizer: Rasterizer::new(device, int64),
             vis0: [vis("deep-gbuffer.raster.vis0.a"), vis("deep-gbuffer.raster.vis0.b")],
+            next: vis("deep-gbuffer.raster.next"),
+            next_frame: gpu::uniform_buffer_for::<FrameUniform>(device, "deep-gbuffer.raster.next"),
             fill: Fill::new(device, vis1.size(), u32::MAX),
             vis1,
             current: 0,
         }
     }
 
-    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer.
-    pub(crate) fn prepare(&mut self, device: &wgpu::Device, scene: &SceneBuffers) {
+    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer;
+    /// `next`: the frame uniform `raster.next` draws with, when the plan runs it.
+    pub(crate) fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        next: Option<&FrameUniform>,
+    ) {
         self.rasterizer.reserve(device, scene);
         self.current = 1 - self.current;
+        if let Some(next) = next {
+            queue.write_buffer(&self.next_frame, 0, bytemuck::bytes_of(next));
+        }
     }
 
     /// Whether this uses the 64-bit atomic path.
@@ -336,13 +352,20 @@ impl Stage for RasterStage {
                 return;
             }
             PassId::RasterLayer0 => Draw { vis0: Some(vis0), ..draw(RasterMode::Layer0) },
+            PassId::RasterNext => {
+                self.fill.record(ctx.device, ctx.pipelines, &mut pass, &self.next);
+                Draw { vis0: Some(&self.next), ..Draw::new(&self.next_frame, RasterMode::Layer0) }
+            }
             PassId::RasterLayer1 => {
                 Draw { vis1: Some(vis1), zref: Some(vis0), ..draw(RasterMode::Layer1) }
             }
             PassId::RasterLayers => Draw {
                 vis0: Some(vis0),
                 vis1: Some(vis1),
-                zref: Some(self.previous_vis0()),
+                zref: Some(match ctx.settings.layer1 {
+                    Layer1Variant::Predict | Layer1Variant::Delay => &self.next,
+                    _ => self.previous_vis0(),
+                }),
                 ..draw(RasterMode::Both {
                     reproject: ctx.settings.layer1 == Layer1Variant::Reproject,
                 })
