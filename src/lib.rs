@@ -74,6 +74,6 @@ pub use scene::{
 };
 pub use settings::{
     AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant,
-    MotionBlurSettings, Normalization, Precision, Preset, RadiosityEstimator, RadiositySettings,
-    ReflectionSettings, Settings, ShadowSettings, TransparencySettings,
+    MotionBlurSettings, Normalization, PositionEncoding, Precision, Preset, RadiosityEstimator,
+    RadiositySettings, ReflectionSettings, Settings, ShadowSettings, TransparencySettings,
 };

@@ -8,8 +8,9 @@ use deep_gbuffer::gpu::{Gpu, GpuOptions};
 use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
     AoEstimator, AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error,
-    Layer1Variant, Normalization, PassId, Precision, Preset, RadiosityEstimator, RadiositySettings,
-    Renderer, Result, Scene, SceneBuffers, SceneInfo, Settings, ShadowSettings, output,
+    Layer1Variant, Normalization, PassId, PositionEncoding, Precision, Preset, RadiosityEstimator,
+    RadiositySettings, Renderer, Result, Scene, SceneBuffers, SceneInfo, Settings, ShadowSettings,
+    output,
 };
 use glam::Vec3;
 
@@ -112,6 +113,9 @@ struct SweepArgs {
     /// G-buffer encodings to sweep.
     #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().precision))]
     precision: Vec<Precision>,
+    /// Position encodings to sweep.
+    #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().position))]
+    position_encoding: Vec<PositionEncoding>,
     /// Radiosity gather radii to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_radius))]
     radiosity_radius: Vec<f32>,
@@ -464,6 +468,9 @@ struct RenderArgs {
     /// G-buffer precision (default: full, or the preset's).
     #[arg(long, value_enum)]
     precision: Option<Precision>,
+    /// How the G-buffer stores positions: the depth every pass after the resolve reads back.
+    #[arg(long, value_enum, default_value_t = PositionEncoding::ViewDepthF32)]
+    position_encoding: PositionEncoding,
     /// Accuracy preset: tap counts, layers and precision (explicit options override it).
     #[arg(long, value_enum)]
     preset: Option<Preset>,
@@ -776,6 +783,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_samples: args.radiosity_samples,
         layers: args.layers,
         precision: args.precision,
+        position: args.position_encoding,
         radiosity_radius: args.radiosity_radius,
         mip_offset: args.mip_offset,
         radiosity_mip_offset: args.radiosity_mip_offset,
@@ -997,6 +1005,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     if let Some(p) = args.precision {
         settings.precision = p;
     }
+    settings.position = args.position_encoding;
     args.estimators.apply(&mut settings);
     settings.validate()?;
     let gpu = open_gpu(adapter)?;

@@ -646,7 +646,7 @@ impl Renderer {
         let previous = self.history.unwrap_or(current);
         let counts = scene.counts();
         let uniform = FrameUniform {
-            flags: FRAME_DIAGNOSTICS,
+            flags: FRAME_DIAGNOSTICS | s.position.frame_flags(),
             ..FrameUniform::new(camera, current, previous, s.width, s.height, s.dz, counts)
         };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));

@@ -64,6 +64,55 @@ impl Precision {
     }
 }
 
+/// How the G-buffer stores where a surface is (the G-buffer precision study's question). Every
+/// kernel reconstructs a surface's view-space position from its pixel centre and the view depth
+/// it reads back, so an encoding matters through the depth it gives back: the resolve stores
+/// the depth as the encoding would hold it, and every later pass sees that. The visibility
+/// buffer keeps exact f32 depths (the raster and its layer test do not change).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
+pub enum PositionEncoding {
+    /// The view depth as an f32 (4 bytes); x and y from the pixel. Exact.
+    #[default]
+    ViewDepthF32,
+    /// The post-perspective position (x/w, y/w, z/w) mapped to [0, 1] in three 16-bit integers
+    /// (6 bytes), the depth recovered through the inverse of the projection: its error grows
+    /// with the square of the depth for a perspective camera (1/z is what z/w spaces evenly).
+    ScreenU16,
+    /// The view-space position as three binary16 floats (6 bytes): a relative error of at most
+    /// 2^-11 at any depth; depths past 65504 are held at 65504.
+    ViewF16,
+}
+
+impl PositionEncoding {
+    /// The encoding's name, as `--position-encoding` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            PositionEncoding::ViewDepthF32 => "view-depth-f32",
+            PositionEncoding::ScreenU16 => "screen-u16",
+            PositionEncoding::ViewF16 => "view-f16",
+        }
+    }
+
+    /// Bytes the encoding takes per pixel and layer.
+    pub fn bytes(self) -> u32 {
+        match self {
+            PositionEncoding::ViewDepthF32 => 4,
+            PositionEncoding::ScreenU16 | PositionEncoding::ViewF16 => 6,
+        }
+    }
+
+    /// Its [`FrameUniform::flags`](crate::frame::FrameUniform) bits.
+    pub fn frame_flags(self) -> u32 {
+        match self {
+            PositionEncoding::ViewDepthF32 => 0,
+            PositionEncoding::ScreenU16 => crate::frame::FRAME_POSITION_SCREEN_U16,
+            PositionEncoding::ViewF16 => crate::frame::FRAME_POSITION_VIEW_F16,
+        }
+    }
+}
+
 /// How the obscurance pass estimates `1 - (1/pi) integral max(1 - d^2/r^2, 0) cos(theta) dw`
 /// (`wgsl/ao.wgsl`, documented there).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -643,6 +692,8 @@ pub struct Settings {
     pub layer1: Layer1Variant,
     /// G-buffer precision.
     pub precision: Precision,
+    /// How the G-buffer stores positions (the depth every pass reads back).
+    pub position: PositionEncoding,
     /// Atomic path.
     pub atomics: AtomicPath,
     /// Record GPU timestamps per pass (when the device has `TIMESTAMP_QUERY`).
@@ -674,6 +725,7 @@ impl Default for Settings {
             dz: 0.05,
             layer1: Layer1Variant::TwoPass,
             precision: Precision::Full,
+            position: PositionEncoding::ViewDepthF32,
             atomics: AtomicPath::Auto,
             timings: true,
             ao: AoSettings::default(),

@@ -29,8 +29,8 @@ use crate::gbuffer::GBufferLayer;
 use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
 use crate::settings::{
-    AoEstimator, AoSettings, DofSettings, Layer1Variant, Precision, RadiositySettings, Settings,
-    TransparencySettings,
+    AoEstimator, AoSettings, DofSettings, Layer1Variant, PositionEncoding, Precision,
+    RadiositySettings, Settings, TransparencySettings,
 };
 use crate::truth::metrics::{self, ErrorStats};
 use crate::truth::{Shot, Tracer, TruthImage};
@@ -51,6 +51,8 @@ pub struct Knobs {
     pub layers: u32,
     /// G-buffer encoding.
     pub precision: Precision,
+    /// How the G-buffer stores positions.
+    pub position: PositionEncoding,
     /// Radiosity gather radius, in scene units. (The obscurance radius is not a knob: it
     /// defines the quantity, and the truth is traced with it.)
     pub radiosity_radius: f32,
@@ -84,6 +86,7 @@ impl Knobs {
         Settings {
             layers: self.layers,
             precision: self.precision,
+            position: self.position,
             dz: self.dz,
             layer1: self.layer1,
             ao: AoSettings {
@@ -153,6 +156,8 @@ pub struct Grid {
     pub layers: Vec<u32>,
     /// Encodings.
     pub precision: Vec<Precision>,
+    /// Position encodings.
+    pub position: Vec<PositionEncoding>,
     /// Radiosity gather radii.
     pub radiosity_radius: Vec<f32>,
     /// Obscurance pyramid level offsets.
@@ -185,6 +190,7 @@ impl Default for Grid {
             radiosity_samples: vec![5, 9, 13, 19, 27],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
+            position: vec![settings.position],
             radiosity_radius: vec![settings.radiosity.radius],
             mip_offset: vec![settings.ao.mip_offset],
             radiosity_mip_offset: vec![settings.radiosity.mip_offset],
@@ -223,6 +229,7 @@ impl Grid {
             radiosity_samples: settings.radiosity.samples,
             layers: 2,
             precision: settings.precision,
+            position: settings.position,
             radiosity_radius: settings.radiosity.radius,
             mip_offset: settings.ao.mip_offset,
             radiosity_mip_offset: settings.radiosity.mip_offset,
@@ -236,6 +243,7 @@ impl Grid {
         };
         let k = times(vec![base], &self.scale, |k, v| k.scale = v);
         let k = times(k, &self.precision, |k, v| k.precision = v);
+        let k = times(k, &self.position, |k, v| k.position = v);
         let k = times(k, &self.layer1, |k, v| k.layer1 = v);
         let k = times(k, &self.dz, |k, v| k.dz = v);
         let k = times(k, &self.mip_offset, |k, v| k.mip_offset = v);
@@ -519,7 +527,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -540,13 +548,14 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
             k.radiosity_samples,
             k.layers,
             k.precision,
+            k.position.name(),
             k.radiosity_radius,
             k.mip_offset,
             k.radiosity_mip_offset,
@@ -603,10 +612,11 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 13] = [
+    let optional: [Column; 14] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
+        ("position", |k| k.position.name().to_string()),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),

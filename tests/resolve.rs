@@ -354,3 +354,93 @@ fn a_provided_gbuffer_that_does_not_fit_is_refused() {
         assert!(e.to_string().contains("layer 1 pixel 7"), "{e}");
     }
 }
+
+/// Each position encoding: the G-buffer's depths are the CPU's `stored_depth` of the visibility
+/// buffer's (to f32 evaluation order: the screen encoding divides through the projection), and
+/// within the encoding's own bound of the exact depth: half a 16-bit step of z/w times
+/// dd/d(z/w) = d^2 / |P32| for `screen-u16`, 2^-11 relative for `view-f16`.
+#[test]
+fn position_encodings_give_back_the_depth_they_can_hold() {
+    use deep_gbuffer::PositionEncoding;
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let g = gpu();
+    for position in
+        [PositionEncoding::ViewDepthF32, PositionEncoding::ScreenU16, PositionEncoding::ViewF16]
+    {
+        let s = Settings { position, timings: false, layers: 2, ..Settings::with_size(48, 36) };
+        let r = render(&scene, &camera, s);
+        let p32 = r.frame.proj[3][2].abs();
+        let mut worst = 0.0f32;
+        for (layer, vis) in [(0, &r.vis0), (1, &r.vis1)] {
+            let got = r.renderer.read_gbuffer(&g.device, &g.queue, layer).unwrap();
+            for (p, (a, &word)) in got.samples.iter().zip(vis.iter()).enumerate() {
+                let Some(exact) = deep_gbuffer::gbuffer::vis_depth(word) else { continue };
+                let expected = cpu::stored_depth(&r.frame, exact);
+                assert!(
+                    (a.depth - expected).abs() <= 4.0 * f32::EPSILON * expected,
+                    "{position:?} layer {layer} pixel {p}: {} against {expected}",
+                    a.depth
+                );
+                let bound = match position {
+                    PositionEncoding::ViewDepthF32 => 0.0,
+                    PositionEncoding::ScreenU16 => {
+                        0.5 / 65535.0 * exact * exact / p32 * 1.01 + 8.0 * f32::EPSILON * exact
+                    }
+                    PositionEncoding::ViewF16 => exact / 2048.0,
+                };
+                let error = (a.depth - exact).abs();
+                assert!(error <= bound, "{position:?}: depth {exact} held as {}", a.depth);
+                worst = worst.max(error / exact);
+            }
+        }
+        eprintln!("{position:?}: largest relative depth error {worst:.2e}");
+        if position != PositionEncoding::ViewDepthF32 {
+            assert!(worst > 0.0, "{position:?} quantizes");
+        }
+    }
+}
+
+/// The depth each encoding gives back over the depth range, for a camera with its near plane at
+/// 0.1 and its far plane at 1000 or at infinity, depth running forward or reversed (printed: the
+/// README's table). 16-bit z/w spaces its steps evenly in 1/d whichever way depth runs, so its
+/// error grows as d^2 / near in every case (reverse-Z helps floats, not fixed point); binary16
+/// keeps 2^-11 of the depth everywhere.
+#[test]
+fn position_error_over_the_depth_range() {
+    use deep_gbuffer::frame::{
+        CameraMatrices, FRAME_POSITION_SCREEN_U16, FRAME_POSITION_VIEW_F16, FrameUniform,
+    };
+    use deep_gbuffer::scene::{Camera, Projection};
+    let depths = [0.53f32, 1.37, 3.71, 17.3, 61.9, 251.3, 913.7];
+    eprintln!("| projection | encoding | {} |", depths.map(|d| format!("d = {d}")).join(" | "));
+    for (far, reverse_z) in [(Some(1000.0), false), (Some(1000.0), true), (None, true)] {
+        let mut camera = Camera::perspective(Vec3::ZERO, Vec3::NEG_Z, 60.0, 0.1);
+        camera.projection = Projection::Perspective { fov_y_deg: 60.0, near: 0.1, far, reverse_z };
+        let m = CameraMatrices::new(&camera, 64, 64);
+        let frame = FrameUniform::new(&camera, m, m, 64, 64, 0.0, (0, 0, 0));
+        for (name, flags) in
+            [("screen-u16", FRAME_POSITION_SCREEN_U16), ("view-f16", FRAME_POSITION_VIEW_F16)]
+        {
+            let f = FrameUniform { flags, ..frame };
+            let errors: Vec<f32> =
+                depths.iter().map(|&d| (cpu::stored_depth(&f, d) - d).abs()).collect();
+            eprintln!(
+                "| far {far:?}, reverse {reverse_z} | {name} | {} |",
+                errors.iter().map(|e| format!("{e:.2e}")).collect::<Vec<_>>().join(" | ")
+            );
+            for (&d, &e) in depths.iter().zip(&errors) {
+                let bound = if flags == FRAME_POSITION_VIEW_F16 {
+                    d / 2048.0
+                } else {
+                    0.5 / 65535.0 * d * d / 0.1 * 1.05 + 1e-6 * d
+                };
+                assert!(e <= bound, "{name}, far {far:?}, reverse {reverse_z}: {d} off by {e}");
+            }
+            if flags == FRAME_POSITION_SCREEN_U16 {
+                // Far away the 16-bit steps are wider than binary16's relative ones.
+                assert!(errors[6] > depths[6] / 2048.0, "{errors:?}");
+            }
+        }
+    }
+}

@@ -12,6 +12,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/texture.wgsl"
 #include "shared/barycentric.wgsl"
+#include "shared/position.wgsl"
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
@@ -206,7 +207,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
     if !(dot(n, n) > 0.5) {
         n = geo;
     }
-    s.depth = d;
+    s.depth = stored_depth(frame, d);
     s.normal = n;
     s.material = mid;
     // Motion: where this point was on screen in the previous frame (static geometry).

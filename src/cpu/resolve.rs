@@ -266,6 +266,23 @@ pub(crate) fn opacity(m: &Material, at: &Corners<'_>) -> f32 {
     if a >= 0.0 { a.min(1.0) } else { 0.0 }
 }
 
+/// As `stored_depth`: the view depth `d` as the frame's position encoding holds it
+/// ([`PositionEncoding`](crate::PositionEncoding), in `f.flags`).
+pub fn stored_depth(f: &FrameUniform, d: f32) -> f32 {
+    use crate::frame::{FRAME_POSITION_SCREEN_U16, FRAME_POSITION_VIEW_F16};
+    if f.flags & FRAME_POSITION_VIEW_F16 != 0 {
+        return half::f16::from_f32(d.min(65504.0)).to_f32();
+    }
+    if f.flags & FRAME_POSITION_SCREEN_U16 != 0 {
+        let c = mat_mul(&f.proj, [0.0, 0.0, -d, 1.0]);
+        let q = ((c.z / c.w).clamp(0.0, 1.0) * 65535.0).round_ties_even() / 65535.0;
+        let p = &f.proj;
+        let back = (q * p[3][3] - p[3][2]) / (q * p[2][3] - p[2][2]);
+        return if back > 0.0 && back <= 3.0e38 { back } else { 3.0e38 };
+    }
+    d
+}
+
 /// The G-buffer sample of visibility word `word` at pixel (x, y).
 pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32) -> GSample {
     let id = word as u32;
@@ -309,7 +326,8 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
     if n.dot(n).is_nan() || n.dot(n) <= 0.5 {
         n = geo;
     }
-    let mut s = GSample { depth: d, normal: n, material: mid, ..GSample::default() };
+    let mut s =
+        GSample { depth: stored_depth(f, d), normal: n, material: mid, ..GSample::default() };
     if let Some(m) = scene.materials.get(mid as usize) {
         let v = material_at(m, &at);
         s.base_color = v.base_color;

@@ -159,6 +159,12 @@ pub struct FrameUniform {
 /// [`FrameUniform::flags`] bit: the raster that reads this frame counts rejected input (the
 /// camera's layer 0; not the shadow maps, so each triangle counts once a frame).
 pub const FRAME_DIAGNOSTICS: u32 = 1;
+/// [`FrameUniform::flags`] bit: the G-buffer holds positions as
+/// [`PositionEncoding::ScreenU16`](crate::PositionEncoding::ScreenU16) would.
+pub const FRAME_POSITION_SCREEN_U16: u32 = 2;
+/// [`FrameUniform::flags`] bit: the G-buffer holds positions as
+/// [`PositionEncoding::ViewF16`](crate::PositionEncoding::ViewF16) would.
+pub const FRAME_POSITION_VIEW_F16: u32 = 4;
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 7 * 64 + 12 * 4);
 

@@ -25,6 +25,9 @@ struct Frame {
 
 // Frame.flags bit: this raster counts rejected input into the diagnostics words.
 const FRAME_DIAGNOSTICS: u32 = 1u;
+// Frame.flags bits: how the G-buffer stores positions (`PositionEncoding`; neither: f32 depth).
+const FRAME_POSITION_SCREEN_U16: u32 = 2u;
+const FRAME_POSITION_VIEW_F16: u32 = 4u;
 
 // m * v written out, so every implementation sums in the same order.
 fn mat_mul(m: mat4x4<f32>, v: vec4<f32>) -> vec4<f32> {

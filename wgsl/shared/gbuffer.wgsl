@@ -43,7 +43,6 @@ fn oct_decode(e: vec2<f32>) -> vec3<f32> {
     return normalize(n);
 }
 
-#if PACKED
 // f32 <-> binary16 by hand: the pack2x16float builtin needs a capability some devices lack.
 fn f16_bits(x: f32) -> u32 {
     let b = bitcast<u32>(x);
@@ -72,6 +71,7 @@ fn f16_value(h: u32) -> f32 {
     return bitcast<f32>(sign | ((e + 112u) << 23u) | (m << 13u));
 }
 
+#if PACKED
 fn pack_half2(v: vec2<f32>) -> u32 {
     return f16_bits(v.x) | (f16_bits(v.y) << 16u);
 }
