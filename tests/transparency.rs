@@ -70,6 +70,16 @@ fn planes() -> (Scene, [(Vec3, f32); 2], Vec3) {
     (scene, glass, back)
 }
 
+/// What the CPU reference reads of the frame `r` drew (no shadows: the tests switch them off).
+fn cpu_inputs<'a>(
+    r: &'a common::Rendered,
+    scene: &'a Scene,
+    layers: u32,
+    behind: &'a [Vec4],
+) -> TransparencyInputs<'a> {
+    TransparencyInputs { frame: &r.frame, scene, opaque: &r.vis0, layers, shadows: None, behind }
+}
+
 fn centre(image: &[Vec4], w: u32, h: u32) -> Vec3 {
     image[((h / 2) * w + w / 2) as usize].truncate()
 }
@@ -115,14 +125,7 @@ fn peels_match_cpu_reference_on_the_glass_box() {
         let r = render(&scene, &camera, settings(w, h, layers));
         let behind = read4(&r.renderer, r.renderer.sharp_buffer().expect("a post pass ran"));
         let out = read4(&r.renderer, r.renderer.hdr_buffer());
-        let inputs = TransparencyInputs {
-            frame: &r.frame,
-            scene: &scene,
-            opaque: &r.vis0,
-            layers,
-            shadows: None,
-            behind: &behind,
-        };
+        let inputs = cpu_inputs(&r, &scene, layers, &behind);
         let peels = inputs.peels();
         let covered = peels[0].iter().filter(|&&w| w != u64::MAX).count();
         assert!(covered > (w * h / 10) as usize, "the panes cover the image ({covered})");
@@ -308,14 +311,7 @@ fn fragments_beyond_the_last_peel_are_reported() {
         let ds = double_sided_triangles(&scene);
         let input = RasterInput::new(&scene, &ds);
         let behind = read4(&r.renderer, r.renderer.sharp_buffer().unwrap());
-        let inputs = TransparencyInputs {
-            frame: &r.frame,
-            scene: &scene,
-            opaque: &r.vis0,
-            layers,
-            shadows: None,
-            behind: &behind,
-        };
+        let inputs = cpu_inputs(&r, &scene, layers, &behind);
         let peels = inputs.peels();
         let expected = cpu::unpeeled_fragments(&r.frame, &input, peels.last().unwrap(), &r.vis0);
         assert_eq!(d.unpeeled_fragments, expected, "k = {layers}");

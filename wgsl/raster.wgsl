@@ -45,8 +45,7 @@
 #include "shared/material.wgsl"
 #include "shared/wide.wgsl"
 #include "shared/vis.wgsl"
-#include "shared/texture.wgsl"
-#include "shared/barycentric.wgsl"
+#include "shared/opacity.wgsl"
 
 const SUBPIXEL: i32 = 256;
 // Triangles at most SMALL_EXTENT pixels across are drawn by their own thread (at most 64: the
@@ -325,7 +324,7 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32, tested: bool) {
     if !(d > 0.0 && d <= frame.far) {
         return;
     }
-    if tested && pixel_opacity(t, pixel, d) < materials[tri_materials[t]].alpha_cutoff {
+    if tested && triangle_opacity(t, vec2<f32>(pixel) + 0.5, d) < materials[tri_materials[t]].alpha_cutoff {
         return;
     }
     let p = u32(pixel.y) * frame.width + u32(pixel.x);
@@ -400,16 +399,6 @@ fn draw_kind(t: u32) -> u32 {
     return select(DRAW_NONE, DRAW_ALL, unit(materials[mid].base_color.a) >= materials[mid].alpha_cutoff);
 #endif
 #endif
-}
-
-// The opacity of triangle t where the ray through pixel's centre meets it at view depth d.
-fn pixel_opacity(t: u32, pixel: vec2<i32>, d: f32) -> f32 {
-    let tri = vec3<u32>(indices[3u * t], indices[3u * t + 1u], indices[3u * t + 2u]);
-    let a = mat_mul(frame.view, vec4<f32>(position(tri.x), 1.0)).xyz;
-    let b = mat_mul(frame.view, vec4<f32>(position(tri.y), 1.0)).xyz;
-    let c = mat_mul(frame.view, vec4<f32>(position(tri.z), 1.0)).xyz;
-    let bary = ray_barycentrics(pixel_ray(frame, vec2<f32>(pixel) + 0.5, d), a, b, c);
-    return material_opacity(tri_materials[t], tri, bary);
 }
 
 // Why triangle t must not be drawn: 0 when it can be, else the diagnostics word that counts it.

@@ -20,8 +20,7 @@
 #include "shared/gbuffer_read.wgsl"
 #include "shared/shade.wgsl"
 #include "shared/vis.wgsl"
-#include "shared/texture.wgsl"
-#include "shared/barycentric.wgsl"
+#include "shared/opacity.wgsl"
 
 // Mirrors `TransparencyUniform` in src/frame/uniforms.rs.
 struct Transparency {
@@ -47,20 +46,6 @@ struct Transparency {
 @group(0) @binding(13) var<storage, read> behind: array<vec4<f32>>;
 @group(0) @binding(14) var<storage, read_write> image: array<vec4<f32>>;
 
-fn position(vertex: u32) -> vec3<f32> {
-    return vec3<f32>(positions[3u * vertex], positions[3u * vertex + 1u], positions[3u * vertex + 2u]);
-}
-
-// The opacity of triangle t where the ray through pixel's centre meets it at view depth d.
-fn peel_opacity(t: u32, pixel: vec2<u32>, d: f32) -> f32 {
-    let tri = vec3<u32>(indices[3u * t], indices[3u * t + 1u], indices[3u * t + 2u]);
-    let a = mat_mul(frame.view, vec4<f32>(position(tri.x), 1.0)).xyz;
-    let b = mat_mul(frame.view, vec4<f32>(position(tri.y), 1.0)).xyz;
-    let c = mat_mul(frame.view, vec4<f32>(position(tri.z), 1.0)).xyz;
-    let bary = ray_barycentrics(pixel_ray(frame, vec2<f32>(pixel) + 0.5, d), a, b, c);
-    return material_opacity(tri_materials[t], tri, bary);
-}
-
 @compute @workgroup_size(8, 8)
 fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
@@ -74,7 +59,7 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let s = sample_at(p);
     let colour = shaded(s, direct[p].rgb, 1.0, vec4<f32>(0.0), transparency.ambient);
-    let a = peel_opacity(id, gid.xy, bitcast<f32>(depth_bits));
+    let a = triangle_opacity(id, vec2<f32>(gid.xy) + 0.5, bitcast<f32>(depth_bits));
     var acc = accum[p];
     let w = (1.0 - acc.a) * a;
     acc = vec4<f32>(acc.rgb + w * colour, acc.a + w);
