@@ -212,6 +212,11 @@ struct TruthArgs {
     #[arg(long)]
     environment: Option<PathBuf>,
     /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
+    /// Degrees the camera turned about its target (around its up axis) since the frame before:
+    /// with --shutter above 0, `--effect full` is traced over the open shutter (the camera moving
+    /// from the one before to this one), and --compare renders the frame before, then this one.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    turn: f32,
     #[arg(long, default_value_t = 1)]
     frames: u32,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
@@ -624,6 +629,15 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     args.estimators.apply(&mut settings);
     settings.validate()?;
     let ao = settings.ao.clone();
+    if !args.turn.is_finite() {
+        return Err(Error::InvalidSetting {
+            name: "turn",
+            message: format!("{} (must be finite)", args.turn),
+        });
+    }
+    let before = camera.orbited(-args.turn);
+    let shutter = settings.motion_blur.shutter;
+    let in_motion = (args.turn != 0.0 && shutter > 0.0).then_some((&before, shutter));
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let effect = args.effect.to_possible_value().expect("every effect is listed");
     let effect = effect.get_name();
@@ -639,7 +653,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         TruthEffect::Ao => tracer.ambient_obscurance(&scene, &shot, &ao, &progress)?,
         TruthEffect::Indirect => tracer.indirect(&scene, &shot, bounces, &progress)?,
         TruthEffect::Reflections => tracer.reflections(&scene, &shot, env, bounces, &progress)?,
-        TruthEffect::Full => tracer.full(&scene, &shot, env, bounces, &progress)?,
+        TruthEffect::Full => {
+            tracer.full_in_motion(&scene, &shot, in_motion, env, bounces, &progress)?
+        }
     };
     bar.finish();
     println!(
@@ -674,8 +690,11 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
                 message: "0 (at least one)".into(),
             });
         }
-        for _ in 0..args.frames {
-            renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
+        // With a turn the frames before the last look from where the camera was.
+        for frame in 0..args.frames {
+            let last = frame + 1 == args.frames;
+            let at = if last || args.turn == 0.0 { &camera } else { &before };
+            renderer.render(&gpu.device, &gpu.queue, &buffers, at)?;
         }
         let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
         let (estimate, effect, what) = match args.effect {
