@@ -140,6 +140,9 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
         (vec!["render".into(), "--reflection-lobe-samples".into(), "0".into()], "lobe_samples"),
         (vec!["truth".into(), "--reflection-thickness=-1".into()], "reflections.thickness"),
+        (vec!["truth".into(), "--turn".into(), "NaN".into()], "turn"),
+        (vec!["render".into(), "--transparency-layers".into(), "0".into()], "transparency.layers"),
+        (vec!["render".into(), "--position-encoding".into(), "u8".into()], "screen-u16"),
         // Wrong arguments, as the parser finds them: one line, exit 1, like the rest.
         (vec!["render".into(), "--nope".into()], "unexpected argument '--nope'"),
         (vec!["render".into(), "--size".into(), "abc".into()], "`abc` is not WxH"),
@@ -284,6 +287,14 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         let stdout = String::from_utf8_lossy(&output.stdout);
         assert!(stdout.contains(expect) && stdout.contains(" ms on "), "{effect}: {stdout}");
     }
+    // Over an open shutter: the truth of a turning camera, compared with the blurred frame.
+    let output = cli()
+        .args(["truth", "builtin:cornell", "--effect", "full", "--size", "24x18", "--spp", "2"])
+        .args(["--turn", "-4", "--shutter", "1", "--frames", "2", "--compare"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("SSIM"));
     let bad = cli().args(["truth", "--spp", "0"]).output().unwrap();
     assert_eq!(bad.status.code(), Some(1));
     assert_eq!(String::from_utf8_lossy(&bad.stderr).trim().lines().count(), 1);
