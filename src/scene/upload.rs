@@ -72,9 +72,9 @@ const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 288);
 
 /// [`GpuMaterial::flags`] bit: both faces visible.
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
-/// [`GpuMaterial::flags`] bit: alpha-tested ([`AlphaMode::Mask`](super::AlphaMode::Mask)).
+/// [`GpuMaterial::flags`] bit: alpha-tested ([`AlphaMode::Mask`]).
 pub const MATERIAL_MASK: u32 = 1 << 6;
-/// [`GpuMaterial::flags`] bit: blended ([`AlphaMode::Blend`](super::AlphaMode::Blend)).
+/// [`GpuMaterial::flags`] bit: blended ([`AlphaMode::Blend`]).
 pub const MATERIAL_BLEND: u32 = 1 << 7;
 /// Index of the base-colour texture in [`GpuMaterial::slots`].
 pub const SLOT_BASE_COLOR: usize = 0;
