@@ -2,9 +2,10 @@
 //! reports is the frame's GPU time, the sum of its passes), in three groups:
 //!
 //! - `passes`: every pass of the full GI frame, of the direct-only frame (the same direct
-//!   light and shadows, no obscurance, radiosity or reflections) and of the GI frame through a
-//!   lens (depth of field) on the Cornell box and a dense scene at 256x256 and 1920x1080; the
-//!   ratio of the first two is what the GI costs.
+//!   light and shadows, no obscurance, radiosity or reflections), of the GI frame through a
+//!   lens (depth of field) and of the GI frame with the shutter open while the camera turns
+//!   (motion blur) on the Cornell box and a dense scene at 256x256 and 1920x1080; the ratio of
+//!   the first two is what the GI costs.
 //! - `triangles`: the two-layer raster (two-pass) and the resolve of `grid-N` for N from 1K to
 //!   5M triangles at 640x360; the slope is milliseconds per million triangles.
 //! - `resolution`: every pass of the Cornell frame from 256x256 to 3840x2160; the slope of each
@@ -37,13 +38,13 @@ fn bench_frames(
     group: &str,
     name: &str,
     scene: &SceneBuffers,
-    camera: &deep_gbuffer::Camera,
+    cameras: &[deep_gbuffer::Camera],
     settings: Settings,
 ) -> Result<PassTotals, deep_gbuffer::Error> {
     let mut renderer = Renderer::new(&gpu.device, &gpu.queue, settings)?;
     // Pipelines are built on first use; the first frame (and the one-pass variants' two-pass
     // first frame) stays out of the figures.
-    for _ in 0..2 {
+    for camera in cameras.iter().cycle().take(2) {
         renderer.render(&gpu.device, &gpu.queue, scene, camera)?;
     }
     let mut totals = PassTotals::default();
@@ -54,12 +55,17 @@ fn bench_frames(
         .measurement_time(Duration::from_secs(2));
     g.bench_function(name, |b| {
         b.iter_custom(|iters| {
-            let ms = common::timed_frames(gpu, &mut renderer, scene, camera, iters, &mut totals);
+            let ms = common::timed_frames(gpu, &mut renderer, scene, cameras, iters, &mut totals);
             Duration::from_secs_f64(ms / 1e3)
         })
     });
     g.finish();
     Ok(totals)
+}
+
+/// One camera, as `bench_frames` takes them.
+fn one(camera: &deep_gbuffer::Camera) -> &[deep_gbuffer::Camera] {
+    std::slice::from_ref(camera)
 }
 
 fn direct_only() -> Effects {
@@ -80,39 +86,59 @@ fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
         let buffers = SceneBuffers::upload(&gpu.device, &scene).unwrap();
         for &(w, h) in &sizes {
             let group = format!("frame/{name}/{w}x{h}");
-            let full =
-                bench_frames(c, gpu, &group, "gi", &buffers, &camera, Settings::with_size(w, h));
+            let full = bench_frames(
+                c,
+                gpu,
+                &group,
+                "gi",
+                &buffers,
+                one(&camera),
+                Settings::with_size(w, h),
+            );
             let settings = Settings { effects: direct_only(), ..Settings::with_size(w, h) };
-            let direct = bench_frames(c, gpu, &group, "direct-only", &buffers, &camera, settings);
+            let direct =
+                bench_frames(c, gpu, &group, "direct-only", &buffers, one(&camera), settings);
             // The GI frame through a lens focused on the camera's target, its aperture a fiftieth
             // of that distance: what the depth of field adds.
             let mut lens_camera = camera.clone();
             let focus = (camera.target - camera.eye).length();
             lens_camera.lens = deep_gbuffer::Lens { radius: focus / 50.0, focus };
             let settings = Settings::with_size(w, h);
-            let lens = bench_frames(c, gpu, &group, "gi-lens", &buffers, &lens_camera, settings);
-            let (full, direct, lens) = match (full, direct, lens) {
-                (Ok(f), Ok(d), Ok(l)) if f.frames > 0 && d.frames > 0 && l.frames > 0 => (f, d, l),
-                (Ok(_), Ok(_), Ok(_)) => continue, // filtered out on the command line
-                (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
-                    let _ = writeln!(out, "{name} {w}x{h}: {e}\n");
-                    continue;
-                }
-            };
+            let lens =
+                bench_frames(c, gpu, &group, "gi-lens", &buffers, one(&lens_camera), settings);
+            // The GI frame with the shutter open, the camera turning back and forth by two
+            // degrees a frame: what the motion blur adds.
+            let mut settings = Settings::with_size(w, h);
+            settings.motion_blur.shutter = 1.0;
+            let turning = [camera.clone(), camera.orbited(2.0)];
+            let shutter = bench_frames(c, gpu, &group, "gi-shutter", &buffers, &turning, settings);
+            let frames = [full, direct, lens, shutter];
+            if let Some(Err(e)) = frames.iter().find(|f| f.is_err()) {
+                let _ = writeln!(out, "{name} {w}x{h}: {e}\n");
+                continue;
+            }
+            let [full, direct, lens, shutter] = frames.map(|f| f.unwrap_or_default());
+            if [&full, &direct, &lens, &shutter].iter().any(|t| t.frames == 0) {
+                continue; // filtered out on the command line
+            }
             let _ = writeln!(
                 out,
-                "{name} ({} triangles) {w}x{h}\n\n| pass | GI frame ms | direct-only ms | GI through a lens ms |\n|---|---:|---:|---:|",
+                "{name} ({} triangles) {w}x{h}\n\n| pass | GI frame ms | direct-only ms | GI through a lens ms | GI, shutter open ms |\n|---|---:|---:|---:|---:|",
                 scene.triangle_count()
             );
             let column = |t: &PassTotals, pass: &str| {
                 if t.ms.contains_key(pass) { format!("{:.2}", t.mean(pass)) } else { "-".into() }
             };
-            for pass in lens.ms.keys() {
-                let (f, d, l) = (column(&full, pass), column(&direct, pass), column(&lens, pass));
-                let _ = writeln!(out, "| `{pass}` | {f} | {d} | {l} |");
+            let mut names: Vec<&String> = lens.ms.keys().chain(shutter.ms.keys()).collect();
+            names.sort();
+            names.dedup();
+            for pass in names {
+                let (f, d) = (column(&full, pass), column(&direct, pass));
+                let (l, m) = (column(&lens, pass), column(&shutter, pass));
+                let _ = writeln!(out, "| `{pass}` | {f} | {d} | {l} | {m} |");
             }
-            let (f, d, l) = (full.frame(), direct.frame(), lens.frame());
-            let _ = writeln!(out, "| total | {f:.2} | {d:.2} | {l:.2} |\n");
+            let (f, d, l, m) = (full.frame(), direct.frame(), lens.frame(), shutter.frame());
+            let _ = writeln!(out, "| total | {f:.2} | {d:.2} | {l:.2} | {m:.2} |\n");
             let _ = writeln!(
                 ratios,
                 "| {name} | {w}x{h} | {:.2} | {:.2} | {:.2} |",
@@ -147,7 +173,7 @@ fn triangles(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
             "triangles",
             &format!("grid-{n}"),
             &buffers,
-            &camera,
+            one(&camera),
             settings,
         ) {
             Ok(t) if t.frames > 0 => t,
@@ -196,7 +222,7 @@ fn resolution(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
             "resolution",
             &format!("{w}x{h}"),
             &buffers,
-            &camera,
+            one(&camera),
             Settings::with_size(w, h),
         ) {
             Ok(t) if t.frames > 0 => rows.push(((w, h), t)),
@@ -245,7 +271,15 @@ fn transparency(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
             let mut settings = Settings::with_size(w, h);
             settings.transparency.layers = layers;
             let group = format!("transparency/{w}x{h}");
-            match bench_frames(c, gpu, &group, &format!("k{layers}"), &buffers, &camera, settings) {
+            match bench_frames(
+                c,
+                gpu,
+                &group,
+                &format!("k{layers}"),
+                &buffers,
+                one(&camera),
+                settings,
+            ) {
                 Ok(t) if t.frames > 0 => {
                     let _ = writeln!(
                         out,

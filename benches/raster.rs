@@ -73,7 +73,7 @@ fn frames(
     iters: u64,
 ) -> f64 {
     let mut totals = common::PassTotals::default();
-    common::timed_frames(gpu, renderer, scene, camera, iters, &mut totals);
+    common::timed_frames(gpu, renderer, scene, std::slice::from_ref(camera), iters, &mut totals);
     *totals.ms.get(pass).unwrap_or_else(|| panic!("no pass {pass}: {:?}", totals.ms.keys()))
 }
 

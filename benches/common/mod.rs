@@ -68,21 +68,22 @@ impl PassTotals {
     }
 }
 
-/// Renders `iters` frames and adds each pass's GPU time to `totals`; returns the frames' summed
-/// GPU milliseconds (every pass), which is what criterion is given. Each frame redraws its shadow
-/// maps, as a frame of a scene whose geometry moves does (a static scene keeps them: see
-/// `Renderer::geometry_changed`), so that their cost shows.
+/// Renders `iters` frames, through `cameras` in turn, and adds each pass's GPU time to
+/// `totals`; returns the frames' summed GPU milliseconds (every pass), which is what criterion
+/// is given. Each frame redraws its shadow maps, as a frame of a scene whose geometry moves does
+/// (a static scene keeps them: see `Renderer::geometry_changed`), so that their cost shows.
 pub fn timed_frames(
     gpu: &Gpu,
     renderer: &mut Renderer,
     scene: &SceneBuffers,
-    camera: &Camera,
+    cameras: &[Camera],
     iters: u64,
     totals: &mut PassTotals,
 ) -> f64 {
     let mut sum = 0.0;
     for _ in 0..iters {
         renderer.geometry_changed();
+        let camera = &cameras[totals.frames as usize % cameras.len()];
         renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
         for t in renderer.timings(&gpu.device).unwrap() {
             *totals.ms.entry(t.name).or_default() += t.ms;
