@@ -15,6 +15,14 @@
 // ambient term (shared/layer1.wgsl); an instant that finds nothing keeps p's own value.
 // Surfaces moving against p's motion are not followed. src/cpu/motion_blur.rs is the same on
 // the CPU.
+//
+// `motion_max` first finds M, the largest motion component (|m|_inf) of any surface the pass
+// reads. A point that stood within 0.75 px (per axis) of p's centre at instant s lies within
+// s M + 0.75 of it now, so the walk's step k, whose pixel centre lies within half a pixel per
+// axis of p's centre + k dir, can only find it while k |dir|_inf <= s M + 1.25, that is for
+// k <= sqrt(2) (s M + 1.25): each instant's walk stops there (plus a pixel for rounding). This
+// only leaves out steps that cannot find anything, so the image is the same as walking the full
+// reach (the CPU reference walks it).
 // defines: PACKED TWO_LAYERS
 
 #include "shared/frame.wgsl"
@@ -40,6 +48,10 @@ struct MotionBlur {
 @group(0) @binding(4) var<storage, read> direct1: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> image: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
+// M's bits (a non-negative f32 orders as its bits), cleared before `motion_max`.
+@group(0) @binding(7) var<storage, read_write> largest: array<atomic<u32>>;
+
+var<workgroup> group_largest: atomic<u32>;
 
 // The view depth (0: no surface) and the motion of layer 0 (`layer1` false) or 1 at pixel p.
 fn depth_motion(p: u32, layer1: bool) -> vec3<f32> {
@@ -63,6 +75,26 @@ fn stood_at(q: vec2<f32>, m: vec2<f32>, s: f32, centre: vec2<f32>) -> bool {
 }
 
 @compute @workgroup_size(8, 8)
+fn motion_max(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        atomicStore(&group_largest, 0u);
+    }
+    workgroupBarrier();
+    if gid.x < frame.width && gid.y < frame.height {
+        let p = gid.y * frame.width + gid.x;
+        var m = abs(depth_motion(p, false).yz);
+#if TWO_LAYERS
+        m = max(m, abs(depth_motion(p, true).yz));
+#endif
+        atomicMax(&group_largest, bitcast<u32>(max(m.x, m.y)));
+    }
+    workgroupBarrier();
+    if li == 0u {
+        atomicMax(&largest[0], atomicLoad(&group_largest));
+    }
+}
+
+@compute @workgroup_size(8, 8)
 fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
         return;
@@ -79,9 +111,11 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let centre = vec2<f32>(gid.xy) + 0.5;
     let jitter = f32(pixel_hash(gid.xy) >> 20u) / 4096.0;
     var sum = vec4<f32>(0.0);
+    let m_max = bitcast<f32>(atomicLoad(&largest[0]));
     for (var i = 0u; i < motion.samples; i++) {
         let s = motion.shutter * (f32(i) + jitter) / f32(motion.samples);
-        let reach = u32(motion.max_blur * s / motion.shutter);
+        let bound = 1.4143 * (s * m_max + 1.25) + 1.0;
+        let reach = u32(min(motion.max_blur * s / motion.shutter, bound));
         var best = image[p];
         var nearest = 3.0e38;
         for (var k = 0u; k <= reach; k++) {

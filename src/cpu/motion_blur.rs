@@ -1,5 +1,6 @@
 //! CPU reference of `wgsl/motion_blur.wgsl`: motion blur of the camera's motion, from both
-//! layers.
+//! layers. It walks each instant's full reach; the kernel stops where the largest motion says
+//! nothing more can be found (`motion_max`), which gives the same image.
 
 use glam::{Vec2, Vec3, Vec4};
 

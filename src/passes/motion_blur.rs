@@ -7,9 +7,10 @@ use crate::plan::PassId;
 use crate::scene::SceneInfo;
 use crate::settings::Settings;
 
-/// The motion blur: its constants.
+/// The motion blur: its constants and the largest motion `motion_max` finds.
 pub(crate) struct MotionBlurStage {
     uniform: wgpu::Buffer,
+    largest: wgpu::Buffer,
 }
 
 impl MotionBlurStage {
@@ -19,6 +20,12 @@ impl MotionBlurStage {
             uniform: gpu::uniform_buffer_for::<MotionBlurUniform>(
                 device,
                 "deep-gbuffer.motion_blur",
+            ),
+            largest: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.motion_blur.largest",
+                4,
+                wgpu::BufferUsages::empty(),
             ),
         }
     }
@@ -31,6 +38,12 @@ impl MotionBlurStage {
 }
 
 impl Stage for MotionBlurStage {
+    fn begin(&self, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        if ctx.plan.contains(&PassId::MotionBlur) {
+            rec.encoder().clear_buffer(&self.largest, 0, None);
+        }
+    }
+
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::MotionBlur);
         let mut pass = rec.pass(id);
@@ -38,8 +51,7 @@ impl Stage for MotionBlurStage {
         if ctx.settings.motion_blur.two_layers && ctx.plan.layers == 2 {
             defines.push("TWO_LAYERS");
         }
-        let pipeline =
-            ctx.pipelines.get(ctx.device, "motion_blur", "motion_blur_main", &defines, &[]);
+        let get = |entry| ctx.pipelines.get(ctx.device, "motion_blur", entry, &defines, &[]);
         let (Some(image), hdr) = ctx.image_io(id) else {
             unreachable!("a post pass reads an image");
         };
@@ -51,7 +63,9 @@ impl Stage for MotionBlurStage {
             (slot::DIRECT1, ctx.direct[1]),
             (slot::IMAGE, image),
             (slot::HDR, hdr),
+            (slot::LARGEST, &self.largest),
         ];
-        pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+        get("motion_max").dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+        get("motion_blur_main").dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
     }
 }
