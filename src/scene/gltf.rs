@@ -3,8 +3,8 @@
 //! emissive, normal and occlusion textures, each with its sampler's wrap modes and
 //! magnification filter, its coordinate set 0 or 1 and `KHR_texture_transform`), tangents (the
 //! file's, or MikkTSpace's where a normal texture needs them), `KHR_lights_punctual`,
-//! `KHR_materials_emissive_strength` and the first camera. Alpha modes, coordinate sets above
-//! 1 and other extensions are named in one warning.
+//! `KHR_materials_emissive_strength`, the alpha mode (`alphaMode`, `alphaCutoff`) and the first
+//! camera. Coordinate sets above 1 and other extensions are named in one warning.
 //!
 //! Mirror reflectivity, which glTF does not have, is derived as `metallic * (1 - roughness)`.
 
