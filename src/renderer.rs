@@ -1023,8 +1023,9 @@ impl Renderer {
         self.stages.composite.hdr()
     }
 
-    /// The composite's image when a pass that reads it ran in the last frame (depth of field,
-    /// motion blur: `hdr_buffer` then holds their result), else `None`.
+    /// The composite's image when a pass that reads it ran in the last frame (the
+    /// transparency's composite, depth of field, motion blur: `hdr_buffer` then holds their
+    /// result), else `None`.
     pub fn sharp_buffer(&self) -> Option<&wgpu::Buffer> {
         let ran = self.plan.as_ref().is_some_and(|p| p.passes.iter().any(PassId::is_post));
         self.stages.composite.post().filter(|_| ran).map(|[first, _]| first)

@@ -43,23 +43,6 @@ fn vertex_tangent(i: u32) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// Texture slot k (which material mid uses) at this point: whether it is read (its texture fits
-// the texel buffer and its coordinates are finite and moderate) and its value.
-struct SlotRead {
-    ok: bool,
-    value: vec3<f32>,
-}
-
-// (Material `mid` is read field by field from the binding: a whole material is 288 bytes.)
-fn read_slot(mid: u32, k: u32, tri: vec3<u32>, bary: vec3<f32>, srgb: bool) -> SlotRead {
-    let t = materials[mid].slots[k];
-    let uv = slot_uv(t, tri, bary);
-    if !(texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6))) {
-        return SlotRead(false, vec3<f32>(0.0));
-    }
-    return SlotRead(true, sample_texture(t, uv, srgb).rgb);
-}
-
 // The normal n turned by the tangent-space normal texture value c (linear rgb): the frame is
 // the vertex tangents interpolated, or where they are missing the triangle's own
 // texture-space frame (dP/du, with the bitangent's sign from dP/dv as glTF's coordinates run);
@@ -160,7 +143,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
             pending &= pending - 1u;
             let r = read_slot(mid, k, tri, bary, k == SLOT_BASE_COLOR || k == SLOT_EMISSIVE);
             if r.ok {
-                texel_values[k] = r.value;
+                texel_values[k] = r.value.rgb;
                 read |= 1u << k;
             }
         }

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::cpu::frame::mat_mul;
-use crate::cpu::resolve::pixel_opacity;
+use crate::cpu::resolve::{triangle_opacity, unit};
 use crate::frame::FrameUniform;
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
 use crate::scene::AlphaMode;
@@ -69,11 +69,6 @@ fn draw_kind(input: &RasterInput, t: usize, peel: bool) -> DrawKind {
     }
 }
 
-/// As `unit`: `x` limited to [0, 1], NaN read as 0.
-fn unit(x: f32) -> f32 {
-    if x >= 0.0 { x.min(1.0) } else { 0.0 }
-}
-
 /// Calls `fragment(x, y, view depth, triangle)` for every fragment [`rasterize`] gives that the
 /// opaque raster (or, with `peel`, a peel) draws: the triangle's material allows it and, for a
 /// masked one with a texture, its opacity there reaches the cutoff.
@@ -91,7 +86,7 @@ fn rasterize_drawn(
             DrawKind::All => true,
             DrawKind::Tested(cutoff) => input
                 .scene
-                .is_some_and(|scene| pixel_opacity(f, scene, t as usize, x, y, d) >= cutoff),
+                .is_some_and(|scene| triangle_opacity(f, scene, t as usize, x, y, d) >= cutoff),
         };
         if drawn {
             fragment(x, y, d, t);
@@ -365,6 +360,12 @@ pub fn raster_layer1(
     vis
 }
 
+/// As `layer1_accepts` under `PEEL`: whether a fragment's word lies strictly behind the last
+/// peel's (`previous`; 0 before the first peel) and strictly in front of layer 0's.
+fn peel_accepts(word: u64, previous: u64, opaque: u64) -> bool {
+    word > previous && word < opaque
+}
+
 /// One transparency peel (the `PEEL` variant): per pixel the nearest fragment of a blended
 /// triangle whose word lies strictly behind `previous` (the last peel's words; `None` for the
 /// first peel) and strictly in front of `opaque` (layer 0).
@@ -378,7 +379,7 @@ pub fn raster_peel(
     rasterize_drawn(f, input, true, |x, y, d, t| {
         let p = (y * f.width + x) as usize;
         let word = vis_pack(d, t);
-        if previous.is_none_or(|prev| word > prev[p]) && word < opaque[p] {
+        if peel_accepts(word, previous.map_or(0, |prev| prev[p]), opaque[p]) {
             vis[p] = vis[p].min(word);
         }
     });
@@ -396,7 +397,7 @@ pub fn unpeeled_fragments(
     rasterize_drawn(f, input, true, |x, y, d, t| {
         let p = (y * f.width + x) as usize;
         let word = vis_pack(d, t);
-        n += u32::from(word > last[p] && word < opaque[p]);
+        n += u32::from(peel_accepts(word, last[p], opaque[p]));
     });
     n
 }

@@ -235,9 +235,9 @@ pub(crate) fn ray_barycentrics(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3, c: Vec
     bary
 }
 
-/// As `pixel_opacity`: the opacity of triangle `id` of `scene` where the ray through pixel
-/// (x, y) meets it at view depth `d` (1 for a triangle without a material).
-pub(crate) fn pixel_opacity(
+/// As `triangle_opacity`: the opacity of triangle `id` of `scene` where the ray through the
+/// centre of pixel (x, y) meets it at view depth `d` (1 for a triangle without a material).
+pub(crate) fn triangle_opacity(
     f: &FrameUniform,
     scene: &Scene,
     id: usize,
@@ -253,17 +253,22 @@ pub(crate) fn pixel_opacity(
     let view = |i: usize| mat_mul(&f.view, scene.positions[i].extend(1.0).to_array()).xyz();
     let (origin, dir) = pixel_ray(f, x, y, d);
     let bary = ray_barycentrics(origin, dir, view(tri[0]), view(tri[1]), view(tri[2]));
-    opacity(m, &Corners { scene, tri, bary })
+    material_opacity(m, &Corners { scene, tri, bary })
 }
 
 /// As `material_opacity`: the material's opacity at a point (its base colour's alpha times its
 /// base-colour texture's), NaN read as 0.
-pub(crate) fn opacity(m: &Material, at: &Corners<'_>) -> f32 {
+pub(crate) fn material_opacity(m: &Material, at: &Corners<'_>) -> f32 {
     let mut a = m.base_color.w;
     if let Some((t, slot, uv)) = at.read_slot(m.base_color_texture) {
         a *= sample_texture_rgba(t, &slot, uv, true).w;
     }
-    if a >= 0.0 { a.min(1.0) } else { 0.0 }
+    unit(a)
+}
+
+/// As `unit`: `x` limited to [0, 1], NaN read as 0.
+pub(crate) fn unit(x: f32) -> f32 {
+    if x >= 0.0 { x.min(1.0) } else { 0.0 }
 }
 
 /// As `stored_depth`: the view depth `d` as the frame's position encoding holds it

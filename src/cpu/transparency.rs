@@ -7,10 +7,10 @@ use glam::{Vec3, Vec4};
 use crate::cpu::composite::shaded;
 use crate::cpu::direct::direct;
 use crate::cpu::raster::{RasterInput, double_sided_triangles, raster_peel};
-use crate::cpu::resolve::{pixel_opacity, resolve};
+use crate::cpu::resolve::{resolve, triangle_opacity};
 use crate::cpu::shadow::Shadows;
 use crate::frame::FrameUniform;
-use crate::gbuffer::{GSample, VIS_EMPTY};
+use crate::gbuffer::{GSample, VIS_EMPTY, vis_depth, vis_id};
 use crate::scene::{GpuLight, Scene};
 
 /// What the transparency passes read: the frame, the scene, the opaque layer 0, the number of
@@ -43,16 +43,14 @@ pub fn accumulate(
     ambient: Vec3,
     acc: Vec4,
 ) -> Vec4 {
-    let id = word as u32;
-    if word >> 32 == u64::from(u32::MAX)
-        || id as usize >= scene.triangles.len()
+    let (Some(id), Some(d)) = (vis_id(word), vis_depth(word)) else { return acc };
+    if id as usize >= scene.triangles.len()
         || scene.triangle_materials[id as usize] as usize >= scene.materials.len()
     {
         return acc;
     }
     let colour = shaded(s, direct, 1.0, Vec4::ZERO, ambient);
-    let d = f32::from_bits((word >> 32) as u32);
-    let a = pixel_opacity(f, scene, id as usize, x, y, d);
+    let a = triangle_opacity(f, scene, id as usize, x, y, d);
     let w = (1.0 - acc.w) * a;
     (acc.truncate() + w * colour).extend(acc.w + w)
 }

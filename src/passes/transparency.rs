@@ -107,18 +107,21 @@ impl Stage for TransparencyStage {
             PassId::TransparencyPeel => {
                 let accumulate =
                     ctx.pipelines.get(ctx.device, "transparency", "accumulate", &defines, &[]);
-                for k in 0..ctx.settings.transparency.layers as usize {
-                    let (current, previous) = (&self.peels[k % 2], &self.peels[1 - k % 2]);
+                // Peel k writes peels[k % 2] against the other (the previous peel).
+                let step = |k: usize, mode| Draw {
+                    vis1: Some(&self.peels[k % 2]),
+                    zref: Some(&self.peels[1 - k % 2]),
+                    opaque: Some(ctx.raster.vis0()),
+                    peel_args: (mode == RasterMode::Peel).then_some(&self.args),
+                    ..Draw::new(ctx.frame, mode)
+                };
+                let r = &ctx.raster.rasterizer;
+                let layers = ctx.settings.transparency.layers as usize;
+                for k in 0..layers {
+                    let current = &self.peels[k % 2];
                     self.empty.record(ctx.device, ctx.pipelines, &mut pass, current);
-                    let step = Draw {
-                        vis1: Some(current),
-                        zref: Some(previous),
-                        opaque: Some(ctx.raster.vis0()),
-                        peel_args: Some(&self.args),
-                        ..Draw::new(ctx.frame, RasterMode::Peel)
-                    };
-                    let r = &ctx.raster.rasterizer;
-                    r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
+                    let peel = step(k, RasterMode::Peel);
+                    r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, peel);
                     // A peel that found nothing costs its raster alone: the kernels below get
                     // no workgroups.
                     let args = Some(&self.args);
@@ -132,15 +135,8 @@ impl Stage for TransparencyStage {
                     accumulate.dispatch_indirect(ctx.device, &mut pass, &entries, &self.args, 0);
                 }
                 // What lies behind the last peel: counted, not drawn.
-                let layers = ctx.settings.transparency.layers as usize;
-                let step = Draw {
-                    vis1: Some(&self.peels[layers % 2]),
-                    zref: Some(&self.peels[1 - layers % 2]),
-                    opaque: Some(ctx.raster.vis0()),
-                    ..Draw::new(ctx.frame, RasterMode::Unpeeled)
-                };
-                let r = &ctx.raster.rasterizer;
-                r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
+                let unpeeled = step(layers, RasterMode::Unpeeled);
+                r.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, unpeeled);
             }
             PassId::TransparencyComposite => {
                 let (Some(behind), image) = ctx.image_io(id) else {

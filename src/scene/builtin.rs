@@ -1,5 +1,5 @@
 //! Built-in scenes, by name: `cornell` (the public-domain Cornell box from `fixtures/cornell`,
-//! compiled into the binary), `cornell-glass` (the same with two crossing tinted glass panes,
+//! compiled into the binary), `cornell-glass` (the same with two overlapping tinted glass panes,
 //! blended) and `grid` / `grid-<triangles>` (a procedural field of tessellated
 //! spheres on a ground plane, for scaling to millions of triangles).
 

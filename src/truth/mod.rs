@@ -205,7 +205,7 @@ impl Tracer {
         let [a, b, c] = tri.map(|i| scene.positions[i]);
         let bary = plane_barycentrics(a, b, c, point);
         let m = &scene.materials[scene.triangle_materials[index] as usize];
-        crate::cpu::resolve::opacity(m, &crate::cpu::resolve::Corners { scene, tri, bary })
+        crate::cpu::resolve::material_opacity(m, &crate::cpu::resolve::Corners { scene, tri, bary })
     }
 
     /// Whether a ray meets triangle `index` at `point`: a masked surface where its opacity

@@ -1,5 +1,5 @@
 // The opacity of a triangle at a pixel, for the rasterizer's alpha test and the transparency's
-// blend (`pixel_opacity` in src/cpu/resolve.rs). The including kernel declares `frame` and the
+// blend (`triangle_opacity` in src/cpu/resolve.rs, which takes the pixel's centre). The including kernel declares `frame` and the
 // bindings `positions`, `indices`, `tri_materials`, `materials`, `texels`, `uvs` and `uvs1`.
 
 #include "shared/texture.wgsl"

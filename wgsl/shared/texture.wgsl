@@ -1,7 +1,7 @@
 // Texture reads shared by the kernels that read materials' textures (the resolve; the
 // rasterizer's and the transparency's opacity). The including kernel declares the bindings
-// `texels` (RGBA8 texels), `uvs` and `uvs1` (2 floats per vertex; a short `uvs1` reads as
-// zero). src/cpu/resolve.rs is the same on the CPU.
+// `materials`, `texels` (RGBA8 texels), `uvs` and `uvs1` (2 floats per vertex; a short `uvs1`
+// reads as zero). src/cpu/resolve.rs is the same on the CPU.
 
 #include "shared/material.wgsl"
 
@@ -91,16 +91,33 @@ fn slot_uv(t: TextureSlot, tri: vec3<u32>, bary: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(dot(t.transform_u.xy, uv) + t.transform_u.z, dot(t.transform_v.xy, uv) + t.transform_v.z);
 }
 
+// Texture slot k (which material mid uses) at this point: whether it is read (its texture fits
+// the texel buffer and its coordinates are finite and moderate) and its value (rgba). The
+// including kernel declares `materials` too.
+struct SlotRead {
+    ok: bool,
+    value: vec4<f32>,
+}
+
+// (Material `mid` is read field by field from the binding: a whole material is 288 bytes.)
+fn read_slot(mid: u32, k: u32, tri: vec3<u32>, bary: vec3<f32>, srgb: bool) -> SlotRead {
+    let t = materials[mid].slots[k];
+    let uv = slot_uv(t, tri, bary);
+    if !(texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6))) {
+        return SlotRead(false, vec4<f32>(0.0));
+    }
+    return SlotRead(true, sample_texture(t, uv, srgb));
+}
+
 // The opacity of material mid at a point (triangle tri's vertices, barycentrics bary): its base
 // colour's alpha times its base-colour texture's, in [0, 1] (NaN read as 0).
-// (`opacity` in src/cpu/resolve.rs.)
+// (`material_opacity` in src/cpu/resolve.rs.)
 fn material_opacity(mid: u32, tri: vec3<u32>, bary: vec3<f32>) -> f32 {
     var a = materials[mid].base_color.a;
     if (slot_bits(materials[mid].flags) & (1u << SLOT_BASE_COLOR)) != 0u {
-        let t = materials[mid].slots[SLOT_BASE_COLOR];
-        let uv = slot_uv(t, tri, bary);
-        if texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6)) {
-            a *= sample_texture(t, uv, true).a;
+        let r = read_slot(mid, SLOT_BASE_COLOR, tri, bary, true);
+        if r.ok {
+            a *= r.value.a;
         }
     }
     return unit(a);
