@@ -217,6 +217,12 @@ struct TruthArgs {
     /// from the one before to this one), and --compare renders the frame before, then this one.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     turn: f32,
+    /// The triangles of a material (by name or index) moved by DX,DY,DZ since the frame before,
+    /// MATERIAL:DX,DY,DZ: with --shutter above 0, `--effect full` is traced over the open
+    /// shutter with the material's vertices moving, and --compare renders the frame before
+    /// (the material back by the offset), then this one.
+    #[arg(long = "move", value_parser = parse_move, allow_hyphen_values = true)]
+    moving: Option<(String, Vec3)>,
     #[arg(long, default_value_t = 1)]
     frames: u32,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
@@ -491,6 +497,11 @@ struct RenderArgs {
     /// first frame at 0, the last at this angle (needs --frames).
     #[arg(long, default_value_t = 0.0, requires = "frames")]
     orbit: f32,
+    /// Move the triangles of a material (by name or index) over all frames, MATERIAL:DX,DY,DZ
+    /// in scene units: the first frame as loaded, the last moved by the whole offset (needs
+    /// --frames; with --shutter the motion blur follows it).
+    #[arg(long = "move", value_parser = parse_move, requires = "frames")]
+    moving: Option<(String, Vec3)>,
     /// Write every frame as DIR/frame_NNNN.png.
     #[arg(long)]
     out_seq: Option<PathBuf>,
@@ -548,6 +559,26 @@ fn parse_boost(s: &str) -> std::result::Result<Boost, String> {
     let (a, b) = s.split_once(',').ok_or_else(|| format!("`{s}` is not UNSATURATED,SATURATED"))?;
     let parse = |v: &str| v.trim().parse::<f32>().map_err(|e| format!("`{v}`: {e}"));
     Ok(Boost { unsaturated: parse(a)?, saturated: parse(b)? })
+}
+
+/// Writes `positions` into the scene's position buffer (as a host moves objects).
+fn write_positions(queue: &wgpu::Queue, buffers: &SceneBuffers, positions: &[Vec3]) {
+    let words: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
+    queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&words));
+}
+
+fn parse_move(s: &str) -> std::result::Result<(String, Vec3), String> {
+    let (name, by) = s.rsplit_once(':').ok_or_else(|| format!("`{s}` is not MATERIAL:DX,DY,DZ"))?;
+    let by: Vec<f32> = by
+        .split(',')
+        .map(|v| v.trim().parse::<f32>().map_err(|e| format!("`{v}`: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match by[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok((name.to_owned(), Vec3::new(x, y, z)))
+        }
+        _ => Err(format!("`{s}`: the offset is three finite numbers DX,DY,DZ")),
+    }
 }
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -636,8 +667,18 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         });
     }
     let before = camera.orbited(-args.turn);
+    // The vertex positions of the frame before, when a material moved since.
+    let positions_before = match &args.moving {
+        Some((name, by)) => Some(scene.positions_moved(scene.material_named(name)?, -*by)?),
+        None => None,
+    };
     let shutter = settings.motion_blur.shutter;
-    let in_motion = (args.turn != 0.0 && shutter > 0.0).then_some((&before, shutter));
+    let moved = args.turn != 0.0 || positions_before.is_some();
+    let in_motion = (moved && shutter > 0.0).then_some(deep_gbuffer::truth::Shutter {
+        before: &before,
+        open: shutter,
+        positions_before: positions_before.as_deref(),
+    });
     let tracer = deep_gbuffer::truth::Tracer::new(&scene)?;
     let effect = args.effect.to_possible_value().expect("every effect is listed");
     let effect = effect.get_name();
@@ -654,7 +695,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         TruthEffect::Indirect => tracer.indirect(&scene, &shot, bounces, &progress)?,
         TruthEffect::Reflections => tracer.reflections(&scene, &shot, env, bounces, &progress)?,
         TruthEffect::Full => {
-            tracer.full_in_motion(&scene, &shot, in_motion, env, bounces, &progress)?
+            tracer.full_in_motion(&scene, &shot, in_motion.as_ref(), env, bounces, &progress)?
         }
     };
     bar.finish();
@@ -690,10 +731,16 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
                 message: "0 (at least one)".into(),
             });
         }
-        // With a turn the frames before the last look from where the camera was.
+        // With a turn the frames before the last look from where the camera was, and with a
+        // move they see the material where it was.
         for frame in 0..args.frames {
             let last = frame + 1 == args.frames;
             let at = if last || args.turn == 0.0 { &camera } else { &before };
+            if let Some(positions) = &positions_before {
+                let now = if last { &scene.positions } else { positions };
+                write_positions(&gpu.queue, &buffers, now);
+                renderer.geometry_changed();
+            }
             renderer.render(&gpu.device, &gpu.queue, &buffers, at)?;
         }
         let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
@@ -1059,10 +1106,20 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     let frames = args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES } else { 1 });
     let mut last_mean: Option<f64> = None;
     let start = camera.clone();
+    let moving = match &args.moving {
+        Some((name, by)) => Some((scene.material_named(name)?, *by)),
+        None => None,
+    };
     let bar = (frames > 1).then(|| Progress::new(u64::from(frames), "frames".into()));
     for i in 0..frames {
         let turn = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 0.0 };
         camera = start.orbited(args.orbit * turn);
+        if let Some((material, by)) = moving
+            && i > 0
+        {
+            write_positions(&gpu.queue, &buffers, &scene.positions_moved(material, by * turn)?);
+            renderer.geometry_changed();
+        }
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
             let hdr = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.hdr_buffer())?;

@@ -257,8 +257,8 @@ pub enum Reason {
     /// Its radius covers less than a pixel even where the scene comes nearest the camera: its
     /// taps could not leave the pixel they start from, so it would change nothing.
     UnderAPixel,
-    /// The camera has not moved since the last frame (or there is none): nothing moved while
-    /// the shutter was open.
+    /// Neither the camera nor the geometry moved since the last frame (or there is none):
+    /// nothing moved while the shutter was open.
     Still,
 }
 
@@ -455,8 +455,9 @@ impl Plan {
         }
     }
 
-    /// This plan for a frame whose camera has not moved since the last one (or that has no last
-    /// one): motion blur has nothing to blur, and is left out ([`Reason::Still`]).
+    /// This plan for a frame whose camera and geometry have not moved since the last one (or
+    /// that has no last one): motion blur has nothing to blur, and is left out
+    /// ([`Reason::Still`]).
     pub fn without_motion(mut self) -> Plan {
         if self.runs(Effect::MotionBlur) {
             self.passes.retain(|p| *p != PassId::MotionBlur);
@@ -511,7 +512,9 @@ impl fmt::Display for Plan {
             Some(Reason::UnderAPixel) => {
                 "off (its radius spans less than a pixel where the scene is nearest)"
             }
-            Some(Reason::Still) => "off (the camera has not moved since the last frame)",
+            Some(Reason::Still) => {
+                "off (neither the camera nor the geometry moved since the last frame)"
+            }
         };
         writeln!(f, "layers:  {}", self.layers)?;
         writeln!(

@@ -9,7 +9,9 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::environment::Environment;
-use crate::frame::{CameraMatrices, FRAME_DIAGNOSTICS, FrameUniform, RasterCounters};
+use crate::frame::{
+    CameraMatrices, FRAME_DIAGNOSTICS, FRAME_OBJECT_MOTION, FrameUniform, RasterCounters,
+};
 use crate::gbuffer::{self, GBufferLayer};
 use crate::gpu::{self, PassTiming, Pipelines, Requirements, Timestamps};
 use crate::passes::ao::AoStage;
@@ -224,6 +226,7 @@ impl Stages {
             frame,
             raster: &self.raster,
             gbuffer: [self.resolve.gbuffer(0), self.resolve.gbuffer(1)],
+            previous_positions: self.resolve.previous(),
             shadows: self
                 .shadows
                 .as_ref()
@@ -500,6 +503,13 @@ impl Renderer {
     /// kept while the light, the scene's bounds, the shadow settings and the scene's buffers
     /// (a scene uploaded or imported anew has new ones) stay the same; the plan lists the kept
     /// ones in [`Plan::reused`]. The camera does not matter: it may move freely.
+    ///
+    /// It also gives moving geometry its motion: the renderer keeps a copy of the scene's vertex
+    /// positions as the last frame drew them (two position buffers' worth of memory; copied on a
+    /// scene's first frame and on each frame after this call), and the next frame's resolve
+    /// writes each surface's motion from where its triangle stood then, so the motion blur,
+    /// which then runs even under a still camera, and the radiosity's reprojection follow moving
+    /// objects. Call it once per frame in which positions changed, after writing them.
     pub fn geometry_changed(&mut self) {
         self.geometry_generation += 1;
     }
@@ -513,7 +523,8 @@ impl Renderer {
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
         let mut plan = Plan::for_view(scene.info(), &self.settings, camera);
         let (w, h) = (self.settings.width, self.settings.height);
-        if self.history.is_none_or(|last| last == CameraMatrices::new(camera, w, h)) {
+        let still = self.history.is_none_or(|last| last == CameraMatrices::new(camera, w, h));
+        if still && !self.stages.resolve.moved(scene, self.geometry_generation) {
             plan = plan.without_motion();
         }
         if self.history.is_none()
@@ -645,8 +656,12 @@ impl Renderer {
         let current = CameraMatrices::new(camera, s.width, s.height);
         let previous = self.history.unwrap_or(current);
         let counts = scene.counts();
+        let moved = plan.contains(&PassId::Resolve)
+            && self.stages.resolve.prepare(device, scene, self.geometry_generation);
         let uniform = FrameUniform {
-            flags: FRAME_DIAGNOSTICS | s.position.frame_flags(),
+            flags: FRAME_DIAGNOSTICS
+                | s.position.frame_flags()
+                | if moved { FRAME_OBJECT_MOTION } else { 0 },
             ..FrameUniform::new(camera, current, previous, s.width, s.height, s.dz, counts)
         };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
@@ -702,7 +717,7 @@ impl Renderer {
             dof.prepare(queue, s, camera, scene.info());
         }
         if plan.runs(Effect::MotionBlur) {
-            let motion = st.motion_blur.get_or_insert_with(|| MotionBlurStage::new(device));
+            let motion = st.motion_blur.get_or_insert_with(|| MotionBlurStage::new(device, s));
             motion.prepare(queue, s, scene.info());
         }
         Ok(current)

@@ -5,13 +5,13 @@ mod common;
 
 use common::{
     PostInputs, assert_few_differ, emissive_quad, gpu, middle_rmse, post_inputs, read4,
-    render_frames,
+    render_frames, render_moving,
 };
 use deep_gbuffer::cpu::motion_blur::MotionBlurInputs;
 use deep_gbuffer::frame::MotionBlurUniform;
 use deep_gbuffer::plan::{Effect, PassId, Reason};
-use deep_gbuffer::truth::{Shot, Tracer};
-use deep_gbuffer::{Camera, MotionBlurSettings, Scene, Settings};
+use deep_gbuffer::truth::{Shot, Shutter, Tracer};
+use deep_gbuffer::{Camera, MotionBlurSettings, Renderer, Scene, Settings};
 use glam::{Vec3, Vec4};
 
 fn settings(w: u32, h: u32, motion_blur: MotionBlurSettings) -> Settings {
@@ -31,13 +31,20 @@ fn camera_at(x: f32) -> Camera {
 /// the GPU's own G-buffer, direct light and image before the pass. Returns that image and the
 /// blurred one.
 fn against_cpu(scene: &Scene, cameras: &[Camera], s: Settings) -> (Vec<Vec4>, Vec<Vec4>) {
+    let r = render_frames(scene, cameras, s);
+    check_against_cpu(scene, &r.renderer)
+}
+
+/// Checks `renderer`'s last frame's motion blur against the CPU's, from the GPU's own G-buffer,
+/// direct light and image before the pass; returns that image and the blurred one.
+fn check_against_cpu(scene: &Scene, renderer: &Renderer) -> (Vec<Vec4>, Vec<Vec4>) {
+    let s = renderer.settings();
     let (w, h) = (s.width, s.height);
     let motion = s.motion_blur.clone();
-    let r = render_frames(scene, cameras, s);
-    let plan = r.renderer.last_plan().unwrap().clone();
+    let plan = renderer.last_plan().unwrap().clone();
     assert!(plan.contains(&PassId::MotionBlur), "{plan}");
-    let PostInputs { layers, direct1, sharp: image, out } = post_inputs(&r.renderer);
-    let u = MotionBlurUniform::new(&motion, scene.ambient.to_array());
+    let PostInputs { layers, direct1, sharp: image, out } = post_inputs(renderer);
+    let u = MotionBlurUniform::new(&motion, scene.ambient.to_array(), w);
     let inputs = MotionBlurInputs {
         u: &u,
         size: (w, h),
@@ -148,7 +155,14 @@ fn the_second_layer_lowers_the_error_behind_a_moving_bar() {
     let tracer = Tracer::new(&scene).unwrap();
     let shot = Shot { camera: &cameras[1], size: (w, h), spp: 512, seed: 7 };
     let truth = tracer
-        .full_in_motion(&scene, &shot, Some((&cameras[0], shutter)), None, 0, &|| {})
+        .full_in_motion(
+            &scene,
+            &shot,
+            Some(&Shutter::camera(&cameras[0], shutter)),
+            None,
+            0,
+            &|| {},
+        )
         .unwrap();
     let mut errors = Vec::new();
     for two_layers in [false, true] {
@@ -212,7 +226,7 @@ fn the_lens_then_the_shutter() {
         sharp: &sharp,
     };
     let through_lens = lens.image();
-    let mu = MotionBlurUniform::new(&motion, ambient);
+    let mu = MotionBlurUniform::new(&motion, ambient, w);
     let shutter = MotionBlurInputs {
         u: &mu,
         size: (w, h),
@@ -243,6 +257,158 @@ fn a_camera_turning_half_around_stays_finite() {
                 v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
                 "{turn}: {v}"
             );
+        }
+    }
+}
+
+/// Depth of the bar of [`bar_scene`] and of the wall behind it.
+const BAR: f32 = 2.0;
+const WALL: f32 = 6.0;
+
+/// An emissive bar 0.6 wide with its left edge at `x`, at depth [`BAR`] in front of an emissive
+/// wall at depth [`WALL`] (the bar's vertices come last: moving `x` moves only those).
+fn bar_scene(x: f32) -> Scene {
+    let mut scene = Scene::default();
+    emissive_quad(&mut scene, WALL, (-20.0, 20.0), Vec3::new(0.1, 0.9, 0.2));
+    emissive_quad(&mut scene, BAR, (x, x + 0.6), Vec3::new(1.0, 0.2, 0.1));
+    scene
+}
+
+/// The bar moved `by` to the right between two frames of a still camera: the resolve gives its
+/// pixels the bar's own screen motion (what the CPU resolve gives from the same vertex
+/// positions) and the wall none; the motion blur runs though the camera stood still, and a
+/// frame after, with nothing moved, it does not.
+#[test]
+fn moving_geometry_has_its_own_motion_vectors() {
+    use deep_gbuffer::cpu::resolve::resolve_moved;
+    let (w, h, by) = (96, 64, 0.2);
+    let (before, after) = (bar_scene(-0.1 - by), bar_scene(-0.1));
+    let camera = camera_at(0.0);
+    let frames = [before.positions.clone(), after.positions.clone()];
+    let mut r = render_moving(&after, &frames, &camera, settings(w, h, open(1.0)));
+    assert!(r.renderer.last_plan().unwrap().contains(&PassId::MotionBlur));
+    let g = gpu();
+    let expected = (by * camera.pixels_of(1.0, BAR, h), 0.0);
+    let cpu = resolve_moved(&r.frame, &after, Some(&before.positions), &r.vis0);
+    let layer =
+        |r: &common::Rendered, l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples;
+    let gpu0 = layer(&r, 0);
+    let (mut bar, mut wall) = (0, 0);
+    for (p, (a, e)) in gpu0.iter().zip(&cpu).enumerate() {
+        assert!((a.motion - e.motion).abs().max_element() < 1e-3, "pixel {p}: {a:?} against {e:?}");
+        let m = (a.motion.x, a.motion.y);
+        if (a.depth - BAR).abs() < 0.01 {
+            bar += 1;
+            assert!((m.0 - expected.0).abs() < 0.01 && m.1.abs() < 0.01, "bar {m:?} {expected:?}");
+        } else {
+            wall += 1;
+            assert!(a.motion.abs().max_element() < 0.01, "the wall stood still: {m:?}");
+        }
+    }
+    assert!(bar > 500 && wall > 500, "{bar} bar and {wall} wall pixels");
+    // Layer 1 behind the bar: the wall, still.
+    for s in layer(&r, 1).iter().filter(|s| s.depth > 0.0) {
+        assert!(s.motion.abs().max_element() < 0.01, "layer 1 {:?}", s.motion);
+    }
+    r.renderer.render(&g.device, &g.queue, &r.buffers, &camera).unwrap();
+    let plan = r.renderer.last_plan().unwrap();
+    assert_eq!(plan.reason(Effect::MotionBlur), Some(Reason::Still), "{plan}");
+    let still = layer(&r, 0);
+    assert!(still.iter().all(|s| s.motion.abs().max_element() < 0.01), "nothing moved since");
+}
+
+/// The bar moves right under a still camera: it streaks over the wall it left behind, over
+/// the shutter's share of its motion (the wall's pixels, still themselves, follow the fastest
+/// motion near them), and its leading edge shows the wall it has just covered; its middle and
+/// the wall beyond the streak are unchanged. The GPU matches the CPU reference.
+#[test]
+fn a_moving_object_streaks_over_its_motion() {
+    let (w, h, by, shutter) = (96, 64, 0.2, 0.75);
+    let (before, after) = (bar_scene(-0.1 - by), bar_scene(-0.1));
+    let camera = camera_at(0.0);
+    let motion = MotionBlurSettings { samples: 64, ..open(shutter) };
+    let frames = [before.positions.clone(), after.positions.clone()];
+    let r = render_moving(&after, &frames, &camera, settings(w, h, motion));
+    let (image, out) = check_against_cpu(&after, &r.renderer);
+    let per_unit = camera.pixels_of(1.0, BAR, h);
+    let streak = shutter * by * per_unit;
+    let (left, right) = (w as f32 / 2.0 - 0.1 * per_unit, w as f32 / 2.0 + 0.5 * per_unit);
+    let y = h / 2;
+    let changed: Vec<u32> = (0..w)
+        .filter(|&x| {
+            let p = (y * w + x) as usize;
+            (out[p] - image[p]).abs().max_element() > 1e-3
+        })
+        .collect();
+    eprintln!("streak {streak} px; bar {left} to {right}; changed columns {changed:?}");
+    let (first, last) = (*changed.first().unwrap() as f32, *changed.last().unwrap() as f32 + 1.0);
+    assert!((first - (left - streak)).abs() <= 1.5, "the trail starts at {first}");
+    assert!((last - right).abs() <= 1.0, "the leading edge ends at {last}");
+    let middle = (left + 1.0).ceil() as u32..(right - streak - 1.0).floor() as u32;
+    assert!(middle.len() > 5 && middle.clone().all(|x| !changed.contains(&x)), "{middle:?}");
+    // Both streaks are about as wide as the motion over the shutter.
+    let trail = changed.iter().filter(|&&x| (x as f32) < left).count() as f32;
+    let lead = changed.iter().filter(|&&x| (x as f32) > left).count() as f32;
+    assert!((trail - streak).abs() <= 1.5 && (lead - streak).abs() <= 1.5, "{trail} {lead}");
+}
+
+/// Against the truth over the shutter (the bar's vertices moved linearly, emission only): with
+/// two layers the error around the bar falls, as its leading edge shows the wall the bar hides.
+#[test]
+fn the_second_layer_lowers_the_error_of_a_moving_object() {
+    let (w, h, by, shutter) = (96, 64, 0.3, 1.0);
+    let (before, after) = (bar_scene(-0.1 - by), bar_scene(-0.1));
+    let camera = camera_at(0.0);
+    let tracer = Tracer::new(&after).unwrap();
+    let shot = Shot { camera: &camera, size: (w, h), spp: 512, seed: 7 };
+    let open_shutter =
+        Shutter { before: &camera, open: shutter, positions_before: Some(&before.positions) };
+    let truth = tracer.full_in_motion(&after, &shot, Some(&open_shutter), None, 0, &|| {}).unwrap();
+    let frames = [before.positions.clone(), after.positions.clone()];
+    let mut errors = Vec::new();
+    for two_layers in [false, true] {
+        let motion = MotionBlurSettings { two_layers, samples: 64, ..open(shutter) };
+        let r = render_moving(&after, &frames, &camera, settings(w, h, motion));
+        let out = read4(&r.renderer, r.renderer.hdr_buffer());
+        errors.push(middle_rmse(&out, &truth, w, 30.0));
+    }
+    eprintln!("RMSE around the moving bar: one layer {:.4}, two {:.4}", errors[0], errors[1]);
+    assert!(errors[1] < 0.8 * errors[0], "two layers {} against one {}", errors[1], errors[0]);
+    // Positions before the shutter that do not fit the scene are typed errors.
+    let short = Shutter { positions_before: Some(&before.positions[1..]), ..open_shutter };
+    let bad = tracer.full_in_motion(&after, &shot, Some(&short), None, 0, &|| {});
+    assert!(matches!(bad, Err(deep_gbuffer::Error::InvalidScene(_))), "{bad:?}");
+}
+
+/// Moving geometry at its extremes: a bar that jumped thousands of pixels, one that stood where
+/// it cannot be (a vertex not a number the frame before), one behind the camera the frame
+/// before, and a packed G-buffer (motion in 16-bit floats, which overflow): the image stays
+/// finite and within the emitters' range, and an unknown motion is never followed.
+#[test]
+fn moving_geometry_at_its_extremes_stays_finite() {
+    let after = bar_scene(-0.1);
+    let bar = after.positions.len() - 4;
+    let jumped = bar_scene(-5000.0).positions;
+    let mut unknown = after.positions.clone();
+    unknown[bar] = Vec3::NAN;
+    let mut behind = after.positions.clone();
+    for p in &mut behind[bar..] {
+        p.z = 3.0;
+    }
+    for precision in [deep_gbuffer::Precision::Full, deep_gbuffer::Precision::Packed] {
+        for before in [&jumped, &unknown, &behind] {
+            let frames = [before.clone(), after.positions.clone()];
+            let s = Settings { precision, ..settings(24, 16, open(1.0)) };
+            let r = render_moving(&after, &frames, &camera_at(0.0), s);
+            for v in read4(&r.renderer, r.renderer.hdr_buffer()) {
+                assert!(
+                    v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
+                    "{precision:?}: {v}"
+                );
+            }
+            let g = gpu();
+            let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+            assert!(layer0.iter().all(|s| !s.motion.is_nan()), "{precision:?}: a NaN motion");
         }
     }
 }

@@ -1,4 +1,6 @@
-// Fills a u32 buffer with one value (clears visibility buffers to empty).
+// Fills a u32 buffer with one value (clears visibility buffers to empty), or copies one (keeps
+// the scene's vertex positions for the next frame's motion vectors: a host's buffer need not
+// allow copies, only storage).
 // Mirrors `FillParams` in src/frame/uniforms.rs.
 struct FillParams {
     value: u32,
@@ -9,11 +11,20 @@ struct FillParams {
 
 @group(0) @binding(0) var<uniform> params: FillParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
+@group(0) @binding(2) var<storage, read> source: array<u32>;
 
 @compute @workgroup_size(256)
 fn fill(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
     let i = gid.x + gid.y * n.x * 256u;
     if i < params.count {
         data[i] = params.value;
+    }
+}
+
+@compute @workgroup_size(256)
+fn copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
+    let i = gid.x + gid.y * n.x * 256u;
+    if i < params.count {
+        data[i] = source[i];
     }
 }

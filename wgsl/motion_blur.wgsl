@@ -1,28 +1,36 @@
-// Motion blur of the camera's motion, from both layers of the deep G-buffer.
+// Motion blur from both layers of the deep G-buffer: of the camera's motion and of geometry
+// that moves.
 //
 // The shutter is open for `shutter` of the time between frames, up to each frame's instant. A
 // surface point whose pixel is q now, with motion vector m(q) (its pixel now minus its pixel in
-// the last frame, as the resolve writes it for each layer), stood a fraction s of a frame
-// earlier at q - s m(q) (moving linearly between frames). For each of `samples` instants
-// s_i = shutter (i + j) / samples (j: a per-pixel offset in [0, 1)) the kernel looks for the
-// surfaces that stood at pixel p then: it walks from p along p's own motion, one pixel a step,
-// out to max_blur s_i / shutter pixels (the longest streak followed over the whole shutter),
-// and at each pixel q takes layer 0, and layer 1 (TWO_LAYERS), when its point stood within
-// three quarters of a pixel of p's centre at s_i; the nearest of those is what p showed then.
-// Layer 1 is where the pass needs the deep G-buffer: where a surface in front has moved on, p
-// showed what it now hides. The pixel takes the mean over the instants: layer 0's radiance from
-// the image before this pass (`image`), layer 1's shaded with its direct light, emission and the
+// the last frame, as the resolve writes it for each layer: camera and object motion both), stood
+// a fraction s of a frame earlier at q - s m(q) (moving linearly between frames). For each of
+// `samples` instants s_i = shutter (i + j) / samples (j: a per-pixel offset in [0, 1)) the
+// kernel looks for the surfaces that stood at pixel p then: it walks from p one pixel a step out
+// to max_blur s_i / shutter pixels (the longest streak followed over the whole shutter), and at
+// each pixel q takes layer 0, and layer 1 (TWO_LAYERS), when its point stood within three
+// quarters of a pixel of p's centre at s_i; the nearest of those is what p showed then. Layer 1
+// is where the pass needs the deep G-buffer: where a surface in front has moved on, p showed
+// what it now hides. The pixel takes the mean over the instants: layer 0's radiance from the
+// image before this pass (`image`), layer 1's shaded with its direct light, emission and the
 // ambient term (shared/layer1.wgsl); an instant that finds nothing keeps p's own value.
-// Surfaces moving against p's motion are not followed. src/cpu/motion_blur.rs is the same on
-// the CPU.
 //
-// `motion_max` first finds M, the largest motion component (|m|_inf) of any surface the pass
-// reads. A point that stood within 0.75 px (per axis) of p's centre at instant s lies within
-// s M + 0.75 of it now, so the walk's step k, whose pixel centre lies within half a pixel per
-// axis of p's centre + k dir, can only find it while k |dir|_inf <= s M + 1.25, that is for
-// k <= sqrt(2) (s M + 1.25): each instant's walk stops there (plus a pixel for rounding). This
-// only leaves out steps that cannot find anything, so the image is the same as walking the full
-// reach (the CPU reference walks it).
+// Which way to walk: a surface found at q moved from p to q, so the walk must follow its
+// motion. Each pixel walks along its own surface's motion (what the camera's motion gives every
+// pixel alike) and along the fastest motion near it (the reconstruction filter's "neighbourhood
+// maximum velocity"): `motion_tiles` finds, per TILE x TILE tile, the motion with the largest
+// component |m|_inf of any surface the pass reads; `motion_neighbours` the largest of those
+// within `tile_reach` tiles, enough to cover every pixel a walk reaches. A still pixel beside a
+// moving object so shows the object passing over it; a surface moving in a third direction
+// near two others is not followed. A motion that is not finite is never followed.
+//
+// The neighbourhood's largest motion M also bounds each walk: a point that stood within 0.75 px
+// (per axis) of p's centre at instant s lies within s M + 0.75 of it now, so the walk's step k,
+// whose pixel centre lies within half a pixel per axis of p's centre + k dir, can only find it
+// while k |dir|_inf <= s M + 1.25, that is for k <= sqrt(2) (s M + 1.25): each instant's walk
+// stops there (plus a pixel for rounding). This only leaves out steps that cannot find anything,
+// so the image is the same as walking the full reach (the CPU reference walks it).
+// src/cpu/motion_blur.rs is the same on the CPU.
 // defines: PACKED TWO_LAYERS
 
 #include "shared/frame.wgsl"
@@ -31,14 +39,19 @@
 #include "shared/shade.wgsl"
 #include "shared/layer1.wgsl"
 
+// Pixels per side of a tile of `motion_tiles`.
+const TILE: u32 = 16u;
+
 // Mirrors `MotionBlurUniform` in src/frame/uniforms.rs.
 struct MotionBlur {
     ambient: vec3<f32>,
     shutter: f32,
     max_blur: f32,
     samples: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Tiles each side that `motion_neighbours` looks over: ceil((max_blur + 1) / TILE).
+    tile_reach: u32,
+    // Tiles per row.
+    tiles_x: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -48,10 +61,10 @@ struct MotionBlur {
 @group(0) @binding(4) var<storage, read> direct1: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> image: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
-// M's bits (a non-negative f32 orders as its bits), cleared before `motion_max`.
-@group(0) @binding(7) var<storage, read_write> largest: array<atomic<u32>>;
-
-var<workgroup> group_largest: atomic<u32>;
+// Per tile: the fastest motion (xy) and its largest component (z), of the tile (`tiles`) and of
+// its neighbourhood (`neighbours`).
+@group(0) @binding(7) var<storage, read_write> tiles: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> neighbours: array<vec4<f32>>;
 
 // The view depth (0: no surface) and the motion of layer 0 (`layer1` false) or 1 at pixel p.
 fn depth_motion(p: u32, layer1: bool) -> vec3<f32> {
@@ -74,23 +87,76 @@ fn stood_at(q: vec2<f32>, m: vec2<f32>, s: f32, centre: vec2<f32>) -> bool {
     return max(d.x, d.y) <= 0.75;
 }
 
+// `best` with the surface at `sample` (depth, motion) when it moves faster: the larger largest
+// component, the earlier one on a tie; a surface with no depth or a motion that is not finite
+// does not count.
+fn faster(best: vec4<f32>, sample: vec3<f32>) -> vec4<f32> {
+    let key = max(abs(sample.y), abs(sample.z));
+    if sample.x > 0.0 && key <= 3.0e38 && key > best.z {
+        return vec4<f32>(sample.yz, key, 0.0);
+    }
+    return best;
+}
+
 @compute @workgroup_size(8, 8)
-fn motion_max(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    if li == 0u {
-        atomicStore(&group_largest, 0u);
+fn motion_tiles(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let tiles_y = (frame.height + TILE - 1u) / TILE;
+    if gid.x >= motion.tiles_x || gid.y >= tiles_y {
+        return;
     }
-    workgroupBarrier();
-    if gid.x < frame.width && gid.y < frame.height {
-        let p = gid.y * frame.width + gid.x;
-        var m = abs(depth_motion(p, false).yz);
+    var best = vec4<f32>(0.0);
+    for (var y = gid.y * TILE; y < min((gid.y + 1u) * TILE, frame.height); y++) {
+        for (var x = gid.x * TILE; x < min((gid.x + 1u) * TILE, frame.width); x++) {
+            let p = y * frame.width + x;
+            best = faster(best, depth_motion(p, false));
 #if TWO_LAYERS
-        m = max(m, abs(depth_motion(p, true).yz));
+            best = faster(best, depth_motion(p, true));
 #endif
-        atomicMax(&group_largest, bitcast<u32>(max(m.x, m.y)));
+        }
     }
-    workgroupBarrier();
-    if li == 0u {
-        atomicMax(&largest[0], atomicLoad(&group_largest));
+    tiles[gid.y * motion.tiles_x + gid.x] = best;
+}
+
+@compute @workgroup_size(8, 8)
+fn motion_neighbours(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let tiles_y = (frame.height + TILE - 1u) / TILE;
+    if gid.x >= motion.tiles_x || gid.y >= tiles_y {
+        return;
+    }
+    var best = vec4<f32>(0.0);
+    let r = motion.tile_reach;
+    for (var y = max(gid.y, r) - r; y <= min(gid.y + r, tiles_y - 1u); y++) {
+        for (var x = max(gid.x, r) - r; x <= min(gid.x + r, motion.tiles_x - 1u); x++) {
+            let t = tiles[y * motion.tiles_x + x];
+            if t.z > best.z {
+                best = t;
+            }
+        }
+    }
+    neighbours[gid.y * motion.tiles_x + gid.x] = best;
+}
+
+// What pixel p showed at instant s as one walk along `dir` finds it: `found` (the radiance and
+// the nearest depth so far) with the nearer surface of each step that stood at p then.
+fn walk(found: ptr<function, vec4<f32>>, nearest: ptr<function, f32>, centre: vec2<f32>, dir: vec2<f32>, s: f32, reach: u32) {
+    for (var k = 0u; k <= reach; k++) {
+        let at = floor(centre + f32(k) * dir);
+        if any(at < vec2<f32>(0.0)) || at.x >= f32(frame.width) || at.y >= f32(frame.height) {
+            break;
+        }
+        let q = u32(at.y) * frame.width + u32(at.x);
+        let s0 = depth_motion(q, false);
+        if s0.x > 0.0 && s0.x < *nearest && stood_at(at, s0.yz, s, centre) {
+            *nearest = s0.x;
+            *found = image[q];
+        }
+#if TWO_LAYERS
+        let s1 = depth_motion(q, true);
+        if s1.x > 0.0 && s1.x < *nearest && stood_at(at, s1.yz, s, centre) {
+            *nearest = s1.x;
+            *found = layer1_radiance(q, motion.ambient);
+        }
+#endif
     }
 }
 
@@ -101,43 +167,34 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = gid.y * frame.width + gid.x;
     let own = depth_motion(p, false);
+    let near = neighbours[(gid.y / TILE) * motion.tiles_x + gid.x / TILE];
+    // The walks: along p's own motion when it moved half a pixel while the shutter was open,
+    // along the neighbourhood's fastest when that moved half a pixel and another way.
     let speed = length(own.yz);
-    if !(own.x > 0.0) || !(speed * motion.shutter >= 0.5) {
-        // Nothing here moved half a pixel while the shutter was open.
+    let walk_own = own.x > 0.0 && speed * motion.shutter >= 0.5;
+    let own_dir = own.yz / speed;
+    let near_dir = near.xy / length(near.xy);
+    let walk_near = near.z * motion.shutter >= 0.5 && !(walk_own && dot(own_dir, near_dir) >= 0.9999);
+    if !walk_own && !walk_near {
         hdr[p] = image[p];
         return;
     }
-    let dir = own.yz / speed;
     let centre = vec2<f32>(gid.xy) + 0.5;
     let jitter = f32(pixel_hash(gid.xy) >> 20u) / 4096.0;
     var sum = vec4<f32>(0.0);
-    let m_max = bitcast<f32>(atomicLoad(&largest[0]));
     for (var i = 0u; i < motion.samples; i++) {
         let s = motion.shutter * (f32(i) + jitter) / f32(motion.samples);
-        let bound = 1.4143 * (s * m_max + 1.25) + 1.0;
+        let bound = 1.4143 * (s * near.z + 1.25) + 1.0;
         let reach = u32(min(motion.max_blur * s / motion.shutter, bound));
-        var best = image[p];
+        var found = image[p];
         var nearest = 3.0e38;
-        for (var k = 0u; k <= reach; k++) {
-            let at = floor(centre + f32(k) * dir);
-            if any(at < vec2<f32>(0.0)) || at.x >= f32(frame.width) || at.y >= f32(frame.height) {
-                break;
-            }
-            let q = u32(at.y) * frame.width + u32(at.x);
-            let s0 = depth_motion(q, false);
-            if s0.x > 0.0 && s0.x < nearest && stood_at(at, s0.yz, s, centre) {
-                nearest = s0.x;
-                best = image[q];
-            }
-#if TWO_LAYERS
-            let s1 = depth_motion(q, true);
-            if s1.x > 0.0 && s1.x < nearest && stood_at(at, s1.yz, s, centre) {
-                nearest = s1.x;
-                best = layer1_radiance(q, motion.ambient);
-            }
-#endif
+        if walk_own {
+            walk(&found, &nearest, centre, own_dir, s, reach);
         }
-        sum += best;
+        if walk_near {
+            walk(&found, &nearest, centre, near_dir, s, reach);
+        }
+        sum += found;
     }
     hdr[p] = sum / f32(motion.samples);
 }

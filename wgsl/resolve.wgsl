@@ -28,12 +28,18 @@
 // them binds a short buffer, which reads as zero.
 @group(0) @binding(10) var<storage, read> uvs1: array<f32>;
 @group(0) @binding(11) var<storage, read> tangents: array<f32>;
+// Each vertex's position in the last frame (read only with FRAME_OBJECT_MOTION).
+@group(0) @binding(12) var<storage, read> previous_positions: array<f32>;
 
 fn load3(buf: u32, i: u32) -> vec3<f32> {
     if buf == 0u {
         return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
     }
     return vec3<f32>(normals[3u * i], normals[3u * i + 1u], normals[3u * i + 2u]);
+}
+
+fn previous_vertex(i: u32) -> vec3<f32> {
+    return vec3<f32>(previous_positions[3u * i], previous_positions[3u * i + 1u], previous_positions[3u * i + 2u]);
 }
 
 fn vertex_tangent(i: u32) -> vec4<f32> {
@@ -193,8 +199,13 @@ fn shade(pixel: vec2<u32>) -> GSample {
     s.depth = stored_depth(frame, d);
     s.normal = n;
     s.material = mid;
-    // Motion: where this point was on screen in the previous frame (static geometry).
-    let pc = mat_mul(frame.prev_view_proj, vec4<f32>(world, 1.0));
+    // Motion: where this point was on screen in the previous frame: the same barycentrics on the
+    // triangle as it stood then (FRAME_OBJECT_MOTION), or the same world point (still geometry).
+    var was = world;
+    if (frame.flags & FRAME_OBJECT_MOTION) != 0u && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
+        was = previous_vertex(i0) * bary.x + previous_vertex(i1) * bary.y + previous_vertex(i2) * bary.z;
+    }
+    let pc = mat_mul(frame.prev_view_proj, vec4<f32>(was, 1.0));
     if pc.w > 1e-20 {
         let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
         let motion = vec2<f32>(pixel) + 0.5 - prev;

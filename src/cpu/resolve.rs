@@ -288,8 +288,23 @@ pub fn stored_depth(f: &FrameUniform, d: f32) -> f32 {
     d
 }
 
-/// The G-buffer sample of visibility word `word` at pixel (x, y).
+/// The G-buffer sample of visibility word `word` at pixel (x, y), the geometry taken as still.
 pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32) -> GSample {
+    resolve_pixel_moved(f, scene, None, word, x, y)
+}
+
+/// [`resolve_pixel`] with each vertex's position in the last frame (`previous`, one per
+/// position), read for the motion vector when `f.flags` has
+/// [`FRAME_OBJECT_MOTION`](crate::frame::FRAME_OBJECT_MOTION), as the kernel reads its
+/// previous-positions buffer.
+pub fn resolve_pixel_moved(
+    f: &FrameUniform,
+    scene: &Scene,
+    previous: Option<&[Vec3]>,
+    word: u64,
+    x: u32,
+    y: u32,
+) -> GSample {
     let id = word as u32;
     if word == VIS_EMPTY || id as usize >= scene.triangles.len() {
         return GSample::default();
@@ -342,7 +357,16 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
         s.occlusion = v.occlusion;
         s.emissive = v.emissive;
     }
-    let pc = mat_mul(&f.prev_view_proj, world.extend(1.0).to_array());
+    let was = match previous {
+        Some(last)
+            if f.flags & crate::frame::FRAME_OBJECT_MOTION != 0
+                && last.len() >= scene.positions.len() =>
+        {
+            last[i0] * bary.x + last[i1] * bary.y + last[i2] * bary.z
+        }
+        _ => world,
+    };
+    let pc = mat_mul(&f.prev_view_proj, was.extend(1.0).to_array());
     if pc.w > 1e-20 {
         let prev = Vec2::new(
             (pc.x / pc.w * 0.5 + 0.5) * f.width as f32,
@@ -356,11 +380,23 @@ pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32)
     s
 }
 
-/// Resolves a whole visibility buffer.
+/// Resolves a whole visibility buffer, the geometry taken as still.
 pub fn resolve(f: &FrameUniform, scene: &Scene, vis: &[u64]) -> Vec<GSample> {
+    resolve_moved(f, scene, None, vis)
+}
+
+/// Resolves a whole visibility buffer as [`resolve_pixel_moved`] does each pixel.
+pub fn resolve_moved(
+    f: &FrameUniform,
+    scene: &Scene,
+    previous: Option<&[Vec3]>,
+    vis: &[u64],
+) -> Vec<GSample> {
     (0..f.height)
         .flat_map(|y| (0..f.width).map(move |x| (x, y)))
-        .map(|(x, y)| resolve_pixel(f, scene, vis[(y * f.width + x) as usize], x, y))
+        .map(|(x, y)| {
+            resolve_pixel_moved(f, scene, previous, vis[(y * f.width + x) as usize], x, y)
+        })
         .collect()
 }
 

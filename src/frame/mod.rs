@@ -20,7 +20,7 @@ pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
 pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
-    AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform,
+    AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform, MOTION_TILE,
     MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform, TransparencyUniform,
 };
 
@@ -152,7 +152,8 @@ pub struct FrameUniform {
     pub material_count: u32,
     /// Vertices in the scene.
     pub vertex_count: u32,
-    /// Bits: [`FRAME_DIAGNOSTICS`].
+    /// Bits: [`FRAME_DIAGNOSTICS`], [`FRAME_POSITION_SCREEN_U16`], [`FRAME_POSITION_VIEW_F16`],
+    /// [`FRAME_OBJECT_MOTION`].
     pub flags: u32,
 }
 
@@ -165,6 +166,10 @@ pub const FRAME_POSITION_SCREEN_U16: u32 = 2;
 /// [`FrameUniform::flags`] bit: the G-buffer holds positions as
 /// [`PositionEncoding::ViewF16`](crate::PositionEncoding::ViewF16) would.
 pub const FRAME_POSITION_VIEW_F16: u32 = 4;
+/// [`FrameUniform::flags`] bit: the geometry moved since the last frame; the resolve reads each
+/// vertex's last position from the previous-positions buffer for the motion vectors (without
+/// it the geometry is taken as still, and only the camera moves).
+pub const FRAME_OBJECT_MOTION: u32 = 8;
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 7 * 64 + 12 * 4);
 

@@ -305,26 +305,34 @@ pub struct MotionBlurUniform {
     pub max_blur: f32,
     /// [`MotionBlurSettings::samples`].
     pub samples: u32,
-    /// Padding.
-    pub _pad: [u32; 2],
+    /// Tiles each side whose fastest motion a pixel follows: enough to cover `max_blur` pixels
+    /// and one more ([`MOTION_TILE`] pixels per tile).
+    pub tile_reach: u32,
+    /// Tiles per row.
+    pub tiles_x: u32,
 }
+
+/// Pixels per side of a motion-blur tile (`TILE` in `wgsl/motion_blur.wgsl`).
+pub const MOTION_TILE: u32 = 16;
 
 mirrored!(
     MotionBlurUniform,
     "motion_blur.wgsl",
     "MotionBlur",
-    [ambient, shutter, max_blur, samples]
+    [ambient, shutter, max_blur, samples, tile_reach, tiles_x]
 );
 
 impl MotionBlurUniform {
-    /// The constants for `s` with the scene's `ambient` radiance.
-    pub fn new(s: &MotionBlurSettings, ambient: [f32; 3]) -> Self {
+    /// The constants for `s` with the scene's `ambient` radiance, for an image `width` pixels
+    /// wide.
+    pub fn new(s: &MotionBlurSettings, ambient: [f32; 3], width: u32) -> Self {
         MotionBlurUniform {
             ambient,
             shutter: s.shutter,
             max_blur: s.max_blur,
             samples: s.samples,
-            _pad: [0; 2],
+            tile_reach: (s.max_blur.clamp(0.0, 256.0).ceil() as u32 + 1).div_ceil(MOTION_TILE),
+            tiles_x: width.div_ceil(MOTION_TILE),
         }
     }
 }

@@ -1,4 +1,5 @@
-//! `wgsl/fill.wgsl`: fills u32 buffers with a value (empties visibility buffers).
+//! `wgsl/fill.wgsl`: fills u32 buffers with a value (empties visibility buffers), or copies
+//! them.
 
 use crate::frame::FillParams;
 use crate::gpu::{self, Pipelines, slots::fill as slot};
@@ -32,6 +33,22 @@ impl Fill {
         debug_assert_eq!(buffer.size() / 4, u64::from(self.count), "a fill of another size");
         let pipeline = pipelines.get(device, "fill", "fill", &[], &[]);
         let entries = [(slot::PARAMS, &self.uniform), (slot::DATA, buffer)];
+        pipeline.dispatch(device, pass, &entries, gpu::dispatch_size(self.count.div_ceil(256)));
+    }
+
+    /// Records the copy of this fill's words from `source` into `buffer` (the value is unused).
+    pub(crate) fn record_copy(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &Pipelines,
+        pass: &mut wgpu::ComputePass<'_>,
+        source: &wgpu::Buffer,
+        buffer: &wgpu::Buffer,
+    ) {
+        debug_assert!(source.size() / 4 >= u64::from(self.count), "a copy of a shorter buffer");
+        debug_assert!(buffer.size() / 4 >= u64::from(self.count), "a copy into a shorter buffer");
+        let pipeline = pipelines.get(device, "fill", "copy", &[], &[]);
+        let entries = [(slot::PARAMS, &self.uniform), (slot::DATA, buffer), (slot::SOURCE, source)];
         pipeline.dispatch(device, pass, &entries, gpu::dispatch_size(self.count.div_ceil(256)));
     }
 }

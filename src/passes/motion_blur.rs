@@ -1,49 +1,46 @@
-//! `wgsl/motion_blur.wgsl`: motion blur of the camera's motion.
+//! `wgsl/motion_blur.wgsl`: motion blur of the camera's motion and of moving geometry.
 
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::MotionBlurUniform;
+use crate::frame::{MOTION_TILE, MotionBlurUniform};
 use crate::gpu::{self, slots::motion_blur as slot};
 use crate::plan::PassId;
 use crate::scene::SceneInfo;
 use crate::settings::Settings;
 
-/// The motion blur: its constants and the largest motion `motion_max` finds.
+/// The motion blur: its constants and the fastest motion of each tile and its neighbourhood.
 pub(crate) struct MotionBlurStage {
     uniform: wgpu::Buffer,
-    largest: wgpu::Buffer,
+    tiles: wgpu::Buffer,
+    neighbours: wgpu::Buffer,
+    /// Tiles per row and column.
+    tile_count: (u32, u32),
 }
 
 impl MotionBlurStage {
-    /// The stage.
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    /// The stage for `s`'s image size.
+    pub(crate) fn new(device: &wgpu::Device, s: &Settings) -> Self {
+        let tile_count = (s.width.div_ceil(MOTION_TILE), s.height.div_ceil(MOTION_TILE));
+        let bytes = u64::from(tile_count.0) * u64::from(tile_count.1) * 16;
+        let tiles = |label| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
         MotionBlurStage {
             uniform: gpu::uniform_buffer_for::<MotionBlurUniform>(
                 device,
                 "deep-gbuffer.motion_blur",
             ),
-            largest: gpu::storage_buffer(
-                device,
-                "deep-gbuffer.motion_blur.largest",
-                4,
-                wgpu::BufferUsages::empty(),
-            ),
+            tiles: tiles("deep-gbuffer.motion_blur.tiles"),
+            neighbours: tiles("deep-gbuffer.motion_blur.neighbours"),
+            tile_count,
         }
     }
 
     /// Writes the frame's constants for `scene`.
     pub(crate) fn prepare(&self, queue: &wgpu::Queue, s: &Settings, scene: &SceneInfo) {
-        let uniform = MotionBlurUniform::new(&s.motion_blur, scene.ambient.to_array());
+        let uniform = MotionBlurUniform::new(&s.motion_blur, scene.ambient.to_array(), s.width);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 }
 
 impl Stage for MotionBlurStage {
-    fn begin(&self, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
-        if ctx.plan.contains(&PassId::MotionBlur) {
-            rec.encoder().clear_buffer(&self.largest, 0, None);
-        }
-    }
-
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::MotionBlur);
         let mut pass = rec.pass(id);
@@ -63,9 +60,11 @@ impl Stage for MotionBlurStage {
             (slot::DIRECT1, ctx.direct[1]),
             (slot::IMAGE, image),
             (slot::HDR, hdr),
-            (slot::LARGEST, &self.largest),
+            (slot::TILES, &self.tiles),
+            (slot::NEIGHBOURS, &self.neighbours),
         ];
-        get("motion_max").dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
+        get("motion_tiles").dispatch_pixels(ctx.device, &mut pass, &entries, self.tile_count);
+        get("motion_neighbours").dispatch_pixels(ctx.device, &mut pass, &entries, self.tile_count);
         get("motion_blur_main").dispatch_pixels(ctx.device, &mut pass, &entries, ctx.size());
     }
 }

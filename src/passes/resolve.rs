@@ -1,12 +1,33 @@
 //! `wgsl/resolve.wgsl`: visibility buffer to G-buffer layer.
 
+use super::fill::Fill;
 use super::{FrameContext, Recorder, Stage};
+use crate::SceneBuffers;
 use crate::gpu::{self, slots::resolve as slot};
 use crate::plan::PassId;
 
 /// The G-buffer layers and the kernel that fills them from the visibility buffers.
 pub(crate) struct ResolveStage {
     gbuffer: [wgpu::Buffer; 2],
+    /// The scene's vertex positions as the last frames saw them, for the motion vectors of
+    /// geometry that moves.
+    positions: Option<Positions>,
+}
+
+/// Two copies of a scene's vertex positions: the one this frame's resolve reads as the last
+/// frame's, and the one it copies this frame's positions into (the next frame's last).
+struct Positions {
+    /// The scene's positions buffer these copy (a scene uploaded or imported anew has another).
+    of: wgpu::Buffer,
+    copies: [wgpu::Buffer; 2],
+    /// The copy that holds the positions of the latest frame copied.
+    latest: usize,
+    /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)'s count at that frame.
+    generation: u64,
+    /// This frame copies the positions (into `copies[latest]`).
+    copy: bool,
+    /// The copy of the vertex words.
+    fill: Fill,
 }
 
 impl ResolveStage {
@@ -15,6 +36,7 @@ impl ResolveStage {
         let g = |label| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
         ResolveStage {
             gbuffer: [g("deep-gbuffer.resolve.layer0"), g("deep-gbuffer.resolve.layer1")],
+            positions: None,
         }
     }
 
@@ -22,12 +44,70 @@ impl ResolveStage {
     pub(crate) fn gbuffer(&self, layer: usize) -> &wgpu::Buffer {
         &self.gbuffer[layer.min(1)]
     }
+
+    /// Whether the geometry of `scene` moved since the last frame this stage resolved:
+    /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed) was called since
+    /// (its count is `generation`) and that frame had the same scene.
+    pub(crate) fn moved(&self, scene: &SceneBuffers, generation: u64) -> bool {
+        self.positions
+            .as_ref()
+            .is_some_and(|p| p.of == scene.buffers().positions && p.generation != generation)
+    }
+
+    /// Makes ready the copies of `scene`'s positions for a frame at `generation`; returns
+    /// whether its geometry moved since the last frame (the frame's `FRAME_OBJECT_MOTION`).
+    /// The first frame of a scene copies its positions; after it, a frame copies them only
+    /// when the geometry changed, into the other copy, so the last frame's stay readable.
+    pub(crate) fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        scene: &SceneBuffers,
+        generation: u64,
+    ) -> bool {
+        let moved = self.moved(scene, generation);
+        let positions = &scene.buffers().positions;
+        let bytes = u64::from(scene.counts().2) * 12;
+        match self.positions.as_mut() {
+            Some(p) if p.of == *positions => {
+                p.copy = moved;
+                if moved {
+                    p.latest ^= 1;
+                    p.generation = generation;
+                }
+            }
+            _ => {
+                let copy =
+                    |label| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+                self.positions = Some(Positions {
+                    of: positions.clone(),
+                    copies: [
+                        copy("deep-gbuffer.resolve.positions0"),
+                        copy("deep-gbuffer.resolve.positions1"),
+                    ],
+                    latest: 0,
+                    generation,
+                    copy: true,
+                    fill: Fill::new(device, bytes, 0),
+                });
+            }
+        }
+        moved
+    }
+
+    /// The positions of the last frame (this frame's own on a scene's first frame).
+    pub(crate) fn previous(&self) -> Option<&wgpu::Buffer> {
+        self.positions.as_ref().map(|p| &p.copies[if p.copy { p.latest ^ 1 } else { p.latest }])
+    }
 }
 
 impl Stage for ResolveStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Resolve);
         let mut pass = rec.pass(id);
+        if let Some(p) = self.positions.as_ref().filter(|p| p.copy) {
+            let into = &p.copies[p.latest];
+            p.fill.record_copy(ctx.device, ctx.pipelines, &mut pass, &ctx.scene.b.positions, into);
+        }
         let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
         for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
             resolve_layer(ctx, &mut pass, vis, gbuffer, None);
@@ -60,6 +140,7 @@ pub(crate) fn resolve_layer(
         (slot::GBUFFER, gbuffer),
         (slot::UVS1, &ctx.scene.uvs1),
         (slot::TANGENTS, &ctx.scene.tangents),
+        (slot::PREVIOUS_POSITIONS, ctx.previous_positions.unwrap_or(&b.positions)),
     ];
     match args {
         Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),

@@ -527,6 +527,40 @@ impl Scene {
         fitted
     }
 
+    /// The material named `name`, or numbered `name` (its index).
+    pub fn material_named(&self, name: &str) -> Result<u32> {
+        let found = self.materials.iter().position(|m| m.name == name).map(|i| i as u32);
+        let numbered = name.parse::<u32>().ok().filter(|&i| (i as usize) < self.materials.len());
+        found.or(numbered).ok_or_else(|| {
+            let names: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
+            Error::setting(
+                "material",
+                format!("`{name}` names no material (the scene's: {})", names.join(", ")),
+            )
+        })
+    }
+
+    /// The vertex positions with every vertex of the triangles of `material` moved by `by`
+    /// (a vertex shared with triangles of other materials moves too): what a host writes into
+    /// the scene's position buffer to move that object (then
+    /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)).
+    pub fn positions_moved(&self, material: u32, by: Vec3) -> Result<Vec<Vec3>> {
+        if !by.is_finite() {
+            return Err(Error::setting("move", format!("{by} (must be finite)")));
+        }
+        let mut moves = vec![false; self.positions.len()];
+        for (t, m) in self.triangles.iter().zip(&self.triangle_materials) {
+            if *m == material {
+                for &i in t {
+                    if let Some(v) = moves.get_mut(i as usize) {
+                        *v = true;
+                    }
+                }
+            }
+        }
+        Ok(self.positions.iter().zip(moves).map(|(p, m)| if m { *p + by } else { *p }).collect())
+    }
+
     /// The scene's camera, or one that frames its bounds.
     pub fn camera_or_default(&self) -> Camera {
         self.camera.clone().unwrap_or_else(|| self.framing_camera())

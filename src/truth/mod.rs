@@ -45,6 +45,58 @@ pub struct Tracer {
     translucent: Option<Box<Scene>>,
 }
 
+/// Instants of the shutter at which [`Tracer::full_in_motion`] stands moving geometry.
+pub const SHUTTER_INSTANTS: usize = 32;
+
+/// What moved while the shutter was open, for [`Tracer::full_in_motion`].
+#[derive(Clone, Copy, Debug)]
+pub struct Shutter<'a> {
+    /// The camera of the frame before (the shot's own if the camera stood still).
+    pub before: &'a Camera,
+    /// The share of the time between the frames the shutter stays open up to the shot's
+    /// instant, in [0, 1].
+    pub open: f32,
+    /// Each vertex's position in the frame before (`None`: the geometry stood still).
+    pub positions_before: Option<&'a [Vec3]>,
+}
+
+impl Shutter<'_> {
+    /// The camera alone moved.
+    pub fn camera(before: &Camera, open: f32) -> Shutter<'_> {
+        Shutter { before, open, positions_before: None }
+    }
+
+    /// Checks the shutter against `scene`; with moving geometry, the instants of the shutter:
+    /// (the share of the way from the frame before, a tracer and the scene as it stood then).
+    fn instants(&self, scene: &Scene) -> Result<Vec<(f32, Tracer, Scene)>> {
+        self.before.validate()?;
+        if !(0.0..=1.0).contains(&self.open) {
+            return Err(Error::setting("shutter", format!("{} (must be in [0, 1])", self.open)));
+        }
+        let Some(before) = self.positions_before else { return Ok(Vec::new()) };
+        if before.len() != scene.positions.len() {
+            return Err(Error::InvalidScene(format!(
+                "{} positions before the shutter for {} vertices",
+                before.len(),
+                scene.positions.len()
+            )));
+        }
+        if let Some(i) = before.iter().position(|p| !p.is_finite()) {
+            return Err(Error::InvalidScene(format!(
+                "position {i} before the shutter is not finite"
+            )));
+        }
+        (0..SHUTTER_INSTANTS)
+            .map(|k| {
+                let t = 1.0 - self.open * (k as f32 + 0.5) / SHUTTER_INSTANTS as f32;
+                let positions = before.iter().zip(&scene.positions).map(|(a, b)| a.lerp(*b, t));
+                let at = Scene { positions: positions.collect(), ..scene.clone() };
+                Ok((t, Tracer::new(&at)?, at))
+            })
+            .collect()
+    }
+}
+
 /// SplitMix64's finaliser: a well-mixed 64-bit hash.
 fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -672,28 +724,27 @@ impl Tracer {
         self.full_in_motion(scene, shot, None, environment, bounces, progress)
     }
 
-    /// [`full`](Tracer::full) over an open shutter: `motion` is the camera of the frame before
-    /// and the share of the time between the frames the shutter stays open up to the shot's
-    /// instant. Each sample is taken at an instant spread uniformly over that time, through the
-    /// camera moved linearly (eye, target and up) from the one before to the shot's: the image
-    /// the motion-blur pass estimates (on the pixels whose ray at the shot's instant meets a
-    /// surface).
+    /// [`full`](Tracer::full) over an open shutter: each sample is taken at an instant of the
+    /// shutter, through the camera moved linearly (eye, target and up) from the one before to
+    /// the shot's, among the geometry as it stood then: the image the motion-blur pass
+    /// estimates (on the pixels whose ray at the shot's instant meets a surface). Without moving
+    /// geometry the instants spread uniformly over the shutter; with it they are the
+    /// [`SHUTTER_INSTANTS`] midpoints of equal parts of it, each with its own tracer of the
+    /// vertices moved linearly (normals as they are: exact for translations).
     pub fn full_in_motion(
         &self,
         scene: &Scene,
         shot: &Shot,
-        motion: Option<(&Camera, f32)>,
+        motion: Option<&Shutter<'_>>,
         environment: Option<&Environment>,
         bounces: u32,
         progress: &(dyn Fn() + Sync),
     ) -> Result<TruthImage> {
         let f = shot.frame()?;
-        if let Some((before, shutter)) = motion {
-            before.validate()?;
-            if !(0.0..=1.0).contains(&shutter) {
-                return Err(Error::setting("shutter", format!("{shutter} (must be in [0, 1])")));
-            }
-        }
+        let instants = match motion {
+            Some(m) => m.instants(scene)?,
+            None => Vec::new(),
+        };
         let spp = shot.spp;
         let lighting = self.lighting(scene, environment);
         let camera = shot.camera;
@@ -708,11 +759,20 @@ impl Tracer {
             }
             let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             Some(sample_mean(spp, || {
-                // The camera at this sample's instant (the shot's own without motion).
+                // The instant of this sample: the camera then and the geometry as it stood.
+                let (mut tracer, mut at_scene, mut t) = (self, scene, 1.0);
+                if let Some(m) = motion {
+                    if instants.is_empty() {
+                        t = 1.0 - m.open * rng.random::<f32>();
+                    } else {
+                        let k = rng.random_range(0..instants.len());
+                        (t, tracer, at_scene) = (instants[k].0, &instants[k].1, &instants[k].2);
+                    }
+                }
                 let moved;
                 let (at, frame) = match motion {
-                    Some((before, shutter)) => {
-                        let t = 1.0 - shutter * rng.random::<f32>();
+                    Some(m) => {
+                        let before = m.before;
                         moved = Camera {
                             eye: before.eye.lerp(camera.eye, t),
                             target: before.target.lerp(camera.target, t),
@@ -725,7 +785,7 @@ impl Tracer {
                     None => (camera, f),
                 };
                 let (origin, dir) = camera_ray(&frame, at, px, rng);
-                self.radiance(scene, &lighting, origin, dir, bounces, rng)
+                tracer.radiance(at_scene, &lighting, origin, dir, bounces, rng)
             }))
         })
     }

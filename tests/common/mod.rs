@@ -42,6 +42,35 @@ pub fn render_frames(scene: &Scene, cameras: &[Camera], settings: Settings) -> R
     for camera in cameras {
         renderer.render(&g.device, &g.queue, &buffers, camera).expect("render");
     }
+    rendered(renderer, buffers)
+}
+
+/// Renders `scene` through `camera` while its geometry moves: a frame with each of `positions`
+/// in turn, as a host moves objects (writes the scene's position buffer, then calls
+/// `geometry_changed`); returns the last.
+pub fn render_moving(
+    scene: &Scene,
+    positions: &[Vec<Vec3>],
+    camera: &Camera,
+    settings: Settings,
+) -> Rendered {
+    let g = gpu();
+    let buffers = SceneBuffers::upload(&g.device, scene).expect("upload");
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).expect("renderer");
+    for (i, frame) in positions.iter().enumerate() {
+        let words: Vec<f32> = frame.iter().flat_map(|p| p.to_array()).collect();
+        g.queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&words));
+        if i > 0 {
+            renderer.geometry_changed();
+        }
+        renderer.render(&g.device, &g.queue, &buffers, camera).expect("render");
+    }
+    rendered(renderer, buffers)
+}
+
+/// What `renderer` drew in its last frame of the scene in `buffers`.
+fn rendered(renderer: Renderer, buffers: SceneBuffers) -> Rendered {
+    let g = gpu();
     let vis0 = renderer.read_visibility(&g.device, &g.queue, 0).expect("read vis0");
     let vis1 = if renderer.last_plan().is_some_and(|p| p.layers == 2) {
         renderer.read_visibility(&g.device, &g.queue, 1).expect("read vis1")

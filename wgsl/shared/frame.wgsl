@@ -28,6 +28,9 @@ const FRAME_DIAGNOSTICS: u32 = 1u;
 // Frame.flags bits: how the G-buffer stores positions (`PositionEncoding`; neither: f32 depth).
 const FRAME_POSITION_SCREEN_U16: u32 = 2u;
 const FRAME_POSITION_VIEW_F16: u32 = 4u;
+// Frame.flags bit: the geometry moved since the last frame (the resolve's motion vectors read
+// the vertices' last positions).
+const FRAME_OBJECT_MOTION: u32 = 8u;
 
 // m * v written out, so every implementation sums in the same order.
 fn mat_mul(m: mat4x4<f32>, v: vec4<f32>) -> vec4<f32> {
