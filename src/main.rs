@@ -140,6 +140,10 @@ struct SweepArgs {
     /// blended material; the truth blends stochastically).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().transparency_layers))]
     transparency_layers: Vec<u32>,
+    /// Shutters to sweep, shares of the time between frames (above 0 the motion blur runs as
+    /// the camera turns; the truth is traced over each shutter).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().shutter))]
+    shutter: Vec<f32>,
     /// Layer separations Δz to sweep, in scene units.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
     dz: Vec<f32>,
@@ -857,6 +861,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_downsample: args.radiosity_downsample,
         dof_samples: args.dof_samples,
         transparency_layers: args.transparency_layers,
+        shutter: args.shutter,
         dz: args.dz,
         layer1: args.layer1,
         scale: args.scale,
@@ -877,11 +882,12 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     let gpu = open_gpu(adapter)?;
     let buffers = SceneBuffers::upload(&gpu.device, &scene)?;
     let bar = Progress::new(
-        sweep::Truth::rows(&scene, h),
+        sweep::Truth::rows(&scene, &grid, h),
         format!("ground truth, {} rays per pixel", args.spp),
     );
     let env = environment.as_ref();
-    let truth = sweep::Truth::trace(&scene, &camera, (w, h), args.spp, env, &|| bar.inc())?;
+    let truth =
+        sweep::Truth::trace(&scene, &camera, &grid, ((w, h), args.spp), env, &|| bar.inc())?;
     bar.finish();
     let bar = Progress::new(configurations.len() as u64 + 1, "configurations".into());
     // One unrecorded measurement first: on lavapipe the first configuration a process measures

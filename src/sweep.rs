@@ -29,11 +29,11 @@ use crate::gbuffer::GBufferLayer;
 use crate::plan::{Effect, PassId};
 use crate::scene::{Camera, Scene};
 use crate::settings::{
-    AoEstimator, AoSettings, DofSettings, Layer1Variant, PositionEncoding, Precision,
-    RadiositySettings, Settings, TransparencySettings,
+    AoEstimator, AoSettings, DofSettings, Layer1Variant, MotionBlurSettings, PositionEncoding,
+    Precision, RadiositySettings, Settings, TransparencySettings,
 };
 use crate::truth::metrics::{self, ErrorStats};
-use crate::truth::{Shot, Tracer, TruthImage};
+use crate::truth::{Shot, Shutter, Tracer, TruthImage};
 use crate::{Error, Renderer, Result, SceneBuffers};
 
 /// One configuration of the accuracy knobs.
@@ -70,6 +70,10 @@ pub struct Knobs {
     /// Blended surfaces peeled per pixel ([`TransparencySettings::layers`]; the transparency
     /// runs when the scene has a blended material).
     pub transparency_layers: u32,
+    /// The share of the time between frames the shutter stays open
+    /// ([`MotionBlurSettings::shutter`]; above 0 the motion blur runs, the camera turning
+    /// [`MOTION_DEGREES`] a frame, and the image is compared with the truth over that shutter).
+    pub shutter: f32,
     /// Minimum separation of layer 1 behind layer 0 (Δz), in scene units.
     pub dz: f32,
     /// How layer 1 is rasterized.
@@ -102,6 +106,10 @@ impl Knobs {
             transparency: TransparencySettings {
                 layers: self.transparency_layers,
                 ..TransparencySettings::default()
+            },
+            motion_blur: MotionBlurSettings {
+                shutter: self.shutter,
+                ..MotionBlurSettings::default()
             },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
@@ -172,6 +180,8 @@ pub struct Grid {
     pub dof_samples: Vec<u32>,
     /// Transparency layers (peels).
     pub transparency_layers: Vec<u32>,
+    /// Shutters.
+    pub shutter: Vec<f32>,
     /// Layer separations.
     pub dz: Vec<f32>,
     /// Layer-1 variants.
@@ -198,6 +208,7 @@ impl Default for Grid {
             radiosity_downsample: vec![settings.radiosity.downsample],
             dof_samples: vec![settings.dof.samples],
             transparency_layers: vec![settings.transparency.layers],
+            shutter: vec![settings.motion_blur.shutter],
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
@@ -237,6 +248,7 @@ impl Grid {
             radiosity_downsample: settings.radiosity.downsample,
             dof_samples: settings.dof.samples,
             transparency_layers: settings.transparency.layers,
+            shutter: settings.motion_blur.shutter,
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
@@ -252,6 +264,7 @@ impl Grid {
         let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
         let k = times(k, &self.dof_samples, |k, v| k.dof_samples = v);
         let k = times(k, &self.transparency_layers, |k, v| k.transparency_layers = v);
+        let k = times(k, &self.shutter, |k, v| k.shutter = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -275,22 +288,41 @@ pub struct Truth {
     pub reflections: Option<TruthImage>,
     /// The full image.
     pub full: TruthImage,
+    /// The full image over each open shutter of the grid, the camera turning
+    /// [`MOTION_DEGREES`] a frame.
+    pub open: Vec<(f32, TruthImage)>,
 }
 
 impl Truth {
-    /// Rows of the image [`Truth::trace`] traces for `scene` (what its progress counts).
-    pub fn rows(scene: &Scene, height: u32) -> u64 {
-        u64::from(height) * if crate::SceneInfo::of(scene).reflective { 4 } else { 3 }
+    /// Rows of the images [`Truth::trace`] traces for `scene` and `grid` (what its progress
+    /// counts).
+    pub fn rows(scene: &Scene, grid: &Grid, height: u32) -> u64 {
+        let images = if crate::SceneInfo::of(scene).reflective { 4 } else { 3 };
+        u64::from(height) * (images + Self::open_shutters(grid).len() as u64)
+    }
+
+    /// The grid's open shutters, each once.
+    fn open_shutters(grid: &Grid) -> Vec<f32> {
+        let mut open: Vec<f32> = grid.shutter.iter().copied().filter(|s| *s > 0.0).collect();
+        open.sort_by(f32::total_cmp);
+        open.dedup();
+        open
+    }
+
+    /// The full image a configuration with `shutter` is compared with.
+    pub fn full_for(&self, shutter: f32) -> &TruthImage {
+        self.open.iter().find(|(s, _)| *s == shutter).map_or(&self.full, |(_, t)| t)
     }
 
     /// Traces every truth of `scene` from `camera` at `width` x `height` with `spp` rays per
-    /// pixel; missed rays see `environment` (else the scene's ambient). `progress` is called
+    /// pixel that `grid` needs (the full image over each of its open shutters besides the
+    /// rest); missed rays see `environment` (else the scene's ambient). `progress` is called
     /// once per finished row of each image.
     pub fn trace(
         scene: &Scene,
         camera: &Camera,
-        size: (u32, u32),
-        spp: u32,
+        grid: &Grid,
+        (size, spp): ((u32, u32), u32),
         environment: Option<&Environment>,
         progress: &(dyn Fn() + Sync),
     ) -> Result<Truth> {
@@ -308,6 +340,22 @@ impl Truth {
             indirect: tracer.indirect(scene, &shot(2), bounces, progress)?,
             reflections,
             full: tracer.full(scene, &shot(4), environment, bounces, progress)?,
+            open: Self::open_shutters(grid)
+                .into_iter()
+                .map(|open| {
+                    let before = camera.orbited(-MOTION_DEGREES);
+                    let shutter = Shutter::camera(&before, open);
+                    let image = tracer.full_in_motion(
+                        scene,
+                        &shot(5),
+                        Some(&shutter),
+                        environment,
+                        bounces,
+                        progress,
+                    )?;
+                    Ok((open, image))
+                })
+                .collect::<Result<_>>()?,
         })
     }
 }
@@ -418,7 +466,8 @@ pub fn measure(
     knobs: &Knobs,
     environment: Option<&Environment>,
 ) -> Result<Row> {
-    let target = (truth.full.width, truth.full.height);
+    let full = truth.full_for(knobs.shutter);
+    let target = (full.width, full.height);
     let size = knobs.size(target.0, target.1);
     let mut renderer = Renderer::new(device, queue, knobs.settings(size.0, size.1))?;
     renderer.set_environment(device, environment)?;
@@ -467,7 +516,7 @@ pub fn measure(
     let mask: Vec<bool> =
         resample(&last.layer0.samples, size, target).iter().map(|s| s.depth > 0.0).collect();
     let hdr = up(&last.hdr);
-    let seen: Vec<bool> = mask.iter().zip(&truth.full.visible).map(|(a, b)| *a && *b).collect();
+    let seen: Vec<bool> = mask.iter().zip(&full.visible).map(|(a, b)| *a && *b).collect();
     let n = MEASURED_FRAMES as f64;
     let instability = |i: usize| (changes[i] / n) as f32;
     let passes = timings;
@@ -481,8 +530,8 @@ pub fn measure(
             (Some(r), Some(t)) => Some(metrics::compare(&up(r), &mask, t)),
             _ => None,
         },
-        full: metrics::compare(&hdr, &mask, &truth.full),
-        ssim: metrics::ssim(&hdr, &truth.full.value, &seen, target, 1.0),
+        full: metrics::compare(&hdr, &mask, full),
+        ssim: metrics::ssim(&hdr, &full.value, &seen, target, 1.0),
         instability: Instability {
             ao: instability(0),
             indirect: instability(1),
@@ -527,7 +576,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -548,7 +597,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -563,6 +612,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_downsample,
             k.dof_samples,
             k.transparency_layers,
+            k.shutter,
             k.dz,
             k.layer1,
             k.scale
@@ -612,7 +662,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 14] = [
+    let optional: [Column; 15] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
@@ -624,6 +674,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
         ("lens rays", |k| k.dof_samples.to_string()),
         ("transparency layers", |k| k.transparency_layers.to_string()),
+        ("shutter", |k| k.shutter.to_string()),
         ("Δz", |k| k.dz.to_string()),
         ("layer 1", |k| format!("{:?}", k.layer1)),
         ("scale", |k| k.scale.to_string()),

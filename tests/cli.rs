@@ -364,3 +364,80 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
     };
     assert_eq!(run("sweep-a"), run("sweep-b"), "the same inputs give the same errors");
 }
+
+/// `sweep --shutter 0,1`: the open shutter's row runs the motion blur (its time is in the CSV)
+/// and is compared with the truth traced over that shutter (another image, so another mean),
+/// the closed one runs none; the Markdown table shows the shutter.
+#[test]
+fn sweep_measures_the_shutter_against_the_truth_over_it() {
+    let dir = out_dir("sweep-shutter");
+    let output = cli()
+        .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
+        .args(["--ao-estimator", "bitmask", "--ao-samples", "4", "--radiosity-samples", "5"])
+        .args(["--layers", "2"])
+        .args(["--shutter", "0,1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
+    assert!(md.contains("| shutter |"), "{md}");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let column = |row: &[&str], name: &str| -> f64 {
+        let i = header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("{name}"));
+        row[i].parse().unwrap()
+    };
+    assert_eq!(rows.len(), 2);
+    assert_eq!((column(&rows[0], "shutter"), column(&rows[1], "shutter")), (0.0, 1.0));
+    assert_eq!(column(&rows[0], "ms_motion_blur"), 0.0, "a closed shutter blurs nothing");
+    assert!(column(&rows[1], "ms_motion_blur") > 0.0, "the open shutter's pass is timed");
+    let means = rows.iter().map(|r| column(r, "image_truth_mean")).collect::<Vec<_>>();
+    assert_ne!(means[0], means[1], "each shutter has its own truth");
+}
+
+/// `--move MATERIAL:DX,DY,DZ`: `render` moves the material over its frames and `truth` traces
+/// the image over the shutter as it moves (and renders the GPU's to compare); a material the
+/// scene lacks and an offset that is not three finite numbers are one-line errors.
+#[test]
+fn move_blurs_a_moving_material_and_refuses_bad_ones() {
+    let dir = out_dir("move");
+    let png = dir.join("moved.png");
+    let output = cli()
+        .args(["render", "builtin:cornell", "--size", "32x24", "--frames", "2", "--shutter", "1"])
+        .args(["--move", "shortBox:0.3,0,0", "--out"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let still = dir.join("still.png");
+    let output = cli()
+        .args(["render", "builtin:cornell", "--size", "32x24", "--frames", "2", "--shutter", "1"])
+        .args(["--out"])
+        .arg(&still)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let (a, b) = (image::open(&png).unwrap().to_rgb8(), image::open(&still).unwrap().to_rgb8());
+    assert_ne!(a.as_raw(), b.as_raw(), "the moved box shows");
+    let output = cli()
+        .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "4", "--effect", "full"])
+        .args(["--move", "1:0.2,0,0", "--shutter", "1", "--compare", "--frames", "2"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("gpu image"));
+    for (spec, expect) in [("nosuch:1,0,0", "names no material"), ("shortBox:1,0", "DX,DY,DZ")] {
+        let output = cli()
+            .args(["render", "builtin:cornell", "--size", "16x12", "--frames", "2"])
+            .args(["--move", spec])
+            .output()
+            .unwrap();
+        assert!(!output.status.success());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(expect), "{spec}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    }
+}

@@ -21,8 +21,10 @@
 // maximum velocity"): `motion_tiles` finds, per TILE x TILE tile, the motion with the largest
 // component |m|_inf of any surface the pass reads; `motion_neighbours` the largest of those
 // within `tile_reach` tiles, enough to cover every pixel a walk reaches. A still pixel beside a
-// moving object so shows the object passing over it; a surface moving in a third direction
-// near two others is not followed. A motion that is not finite is never followed.
+// moving object so shows the object passing over it. The second walk is left out where the
+// first passes within half a pixel of where the fastest motion puts its surfaces (under camera
+// motion, nearly everywhere). A surface moving in a third direction near two others is not
+// followed; a motion that is not finite never is.
 //
 // The neighbourhood's largest motion M also bounds each walk: a point that stood within 0.75 px
 // (per axis) of p's centre at instant s lies within s M + 0.75 of it now, so the walk's step k,
@@ -168,13 +170,17 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = gid.y * frame.width + gid.x;
     let own = depth_motion(p, false);
     let near = neighbours[(gid.y / TILE) * motion.tiles_x + gid.x / TILE];
-    // The walks: along p's own motion when it moved half a pixel while the shutter was open,
-    // along the neighbourhood's fastest when that moved half a pixel and another way.
+    // The walks: along p's own motion when it moved half a pixel while the shutter was open;
+    // along the neighbourhood's fastest when that moved half a pixel, unless the own walk
+    // passes within half a pixel of where it puts the surfaces that stood at p (the same way,
+    // off the own walk's line by at most the shutter's share of the motion across it).
     let speed = length(own.yz);
     let walk_own = own.x > 0.0 && speed * motion.shutter >= 0.5;
     let own_dir = own.yz / speed;
     let near_dir = near.xy / length(near.xy);
-    let walk_near = near.z * motion.shutter >= 0.5 && !(walk_own && dot(own_dir, near_dir) >= 0.9999);
+    let across = abs(own_dir.x * near.y - own_dir.y * near.x) * motion.shutter;
+    let covered = walk_own && dot(own_dir, near.xy) > 0.0 && across <= 0.5;
+    let walk_near = near.z * motion.shutter >= 0.5 && !covered;
     if !walk_own && !walk_near {
         hdr[p] = image[p];
         return;

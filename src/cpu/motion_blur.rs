@@ -109,8 +109,9 @@ impl MotionBlurInputs<'_> {
         let walk_own = own.depth > 0.0 && speed * u.shutter >= 0.5;
         let own_dir = own.motion / speed;
         let near_dir = near.motion / near.motion.length();
-        let walk_near =
-            near.key * u.shutter >= 0.5 && !(walk_own && own_dir.dot(near_dir) >= 0.9999);
+        let across = (own_dir.x * near.motion.y - own_dir.y * near.motion.x).abs() * u.shutter;
+        let covered = walk_own && own_dir.dot(near.motion) > 0.0 && across <= 0.5;
+        let walk_near = near.key * u.shutter >= 0.5 && !covered;
         if !walk_own && !walk_near {
             return self.image[p];
         }
