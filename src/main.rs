@@ -501,9 +501,9 @@ struct RenderArgs {
     /// first frame at 0, the last at this angle (needs --frames).
     #[arg(long, default_value_t = 0.0, requires = "frames")]
     orbit: f32,
-    /// Move the triangles of a material (by name or index) over all frames, MATERIAL:DX,DY,DZ
-    /// in scene units: the first frame as loaded, the last moved by the whole offset (needs
-    /// --frames; with --shutter the motion blur follows it).
+    /// Move the triangles of a material (by name or index) by DX,DY,DZ scene units a frame,
+    /// MATERIAL:DX,DY,DZ, arriving where the scene has it at the last frame (needs --frames; with
+    /// --shutter the motion blur follows it; the last frame is the one `truth --move` traces).
     #[arg(long = "move", value_parser = parse_move, requires = "frames")]
     moving: Option<(String, Vec3)>,
     /// Write every frame as DIR/frame_NNNN.png.
@@ -1120,10 +1120,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     for i in 0..frames {
         let turn = if frames > 1 { i as f32 / (frames - 1) as f32 } else { 0.0 };
         camera = start.orbited(args.orbit * turn);
-        if let Some((material, by)) = moving
-            && i > 0
-        {
-            write_positions(&gpu.queue, &buffers, &scene.positions_moved(material, by * turn)?);
+        if let Some((material, by)) = moving {
+            let back = (frames - 1 - i) as f32;
+            write_positions(&gpu.queue, &buffers, &scene.positions_moved(material, -by * back)?);
             renderer.geometry_changed();
         }
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;

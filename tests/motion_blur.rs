@@ -47,6 +47,7 @@ fn check_against_cpu(scene: &Scene, renderer: &Renderer) -> (Vec<Vec4>, Vec<Vec4
     let u = MotionBlurUniform::new(&motion, scene.ambient.to_array(), w);
     let inputs = MotionBlurInputs {
         u: &u,
+        frame: renderer.frame_uniform().unwrap(),
         size: (w, h),
         layers: [&layers[0], &layers[1]],
         two_layers: motion.two_layers && plan.layers == 2,
@@ -229,6 +230,7 @@ fn the_lens_then_the_shutter() {
     let mu = MotionBlurUniform::new(&motion, ambient, w);
     let shutter = MotionBlurInputs {
         u: &mu,
+        frame: r.renderer.frame_uniform().unwrap(),
         size: (w, h),
         layers,
         two_layers: true,

@@ -16,17 +16,19 @@
 // ambient term (shared/layer1.wgsl); an instant that finds nothing keeps p's own value.
 //
 // Which way to walk: a surface found at q moved from p to q, so the walk must follow its
-// motion. Each pixel walks along its own surface's motion (what the camera's motion gives every
-// pixel alike) and along the fastest motion near it (the reconstruction filter's "neighbourhood
-// maximum velocity"): `motion_tiles` finds, per TILE x TILE tile, the motion with the largest
-// component |m|_inf of any surface the pass reads; `motion_neighbours` the largest of those
-// within `tile_reach` tiles, enough to cover every pixel a walk reaches. A still pixel beside a
-// moving object so shows the object passing over it. The second walk is left out where the
-// first passes within half a pixel of where the fastest motion puts its surfaces (under camera
-// motion, nearly everywhere). A surface moving in a third direction near two others is not
-// followed; a motion that is not finite never is.
+// motion. Each pixel walks along its own surface's motion, which follows the camera's: that
+// motion changes smoothly across the image but for depth. Geometry moving by itself breaks it,
+// so each pixel also walks along the motion of the fastest such surface near it (the
+// reconstruction filter's "neighbourhood maximum velocity", of the objects' own motion):
+// `motion_tiles` finds, per TILE x TILE tile, the surface (of those the pass reads) whose
+// motion differs most (largest component) from what the camera alone gives it, and
+// `motion_neighbours` the most of those within `tile_reach` tiles, enough to cover every pixel
+// a walk reaches. A still pixel beside a moving object so shows the object passing over it.
+// The second walk is left out where the first passes within half a pixel of where that motion
+// puts its surfaces. A third motion near two others is not followed; a motion that is not
+// finite never is.
 //
-// The neighbourhood's largest motion M also bounds each walk: a point that stood within 0.75 px
+// The neighbourhood's largest motion component M (of any surface) also bounds each walk: a point that stood within 0.75 px
 // (per axis) of p's centre at instant s lies within s M + 0.75 of it now, so the walk's step k,
 // whose pixel centre lies within half a pixel per axis of p's centre + k dir, can only find it
 // while k |dir|_inf <= s M + 1.25, that is for k <= sqrt(2) (s M + 1.25): each instant's walk
@@ -63,8 +65,9 @@ struct MotionBlur {
 @group(0) @binding(4) var<storage, read> direct1: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> image: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> hdr: array<vec4<f32>>;
-// Per tile: the fastest motion (xy) and its largest component (z), of the tile (`tiles`) and of
-// its neighbourhood (`neighbours`).
+// Per tile (`tiles`) and per tile neighbourhood (`neighbours`): the motion (xy) of the surface
+// moving most by itself and the largest component of that own motion (z), and the largest
+// motion component of any surface (w).
 @group(0) @binding(7) var<storage, read_write> tiles: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> neighbours: array<vec4<f32>>;
 
@@ -89,15 +92,34 @@ fn stood_at(q: vec2<f32>, m: vec2<f32>, s: f32, centre: vec2<f32>) -> bool {
     return max(d.x, d.y) <= 0.75;
 }
 
-// `best` with the surface at `sample` (depth, motion) when it moves faster: the larger largest
-// component, the earlier one on a tie; a surface with no depth or a motion that is not finite
-// does not count.
-fn faster(best: vec4<f32>, sample: vec3<f32>) -> vec4<f32> {
-    let key = max(abs(sample.y), abs(sample.z));
-    if sample.x > 0.0 && key <= 3.0e38 && key > best.z {
-        return vec4<f32>(sample.yz, key, 0.0);
+// The motion the camera alone gives the surface at view depth `d` seen through the centre
+// `centre` of a pixel (the resolve's for still geometry; none where it stood behind the camera).
+fn camera_motion(centre: vec2<f32>, d: f32) -> vec2<f32> {
+    let pc = reproject(frame, centre, d).clip;
+    if !(pc.w > 1e-20) {
+        return vec2<f32>(0.0);
     }
-    return best;
+    let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
+    return centre - prev;
+}
+
+// `best` (as a tile holds it) with the surface at pixel `centre` whose (depth, motion) is
+// `sample`: the largest motion component, and the motion of the surface moving most by itself
+// (the larger largest component of its motion less the camera's, the earlier one on a tie). A
+// surface with no depth or a motion that is not finite does not count.
+fn faster(best: vec4<f32>, sample: vec3<f32>, centre: vec2<f32>) -> vec4<f32> {
+    let key = max(abs(sample.y), abs(sample.z));
+    if !(sample.x > 0.0 && key <= 3.0e38) {
+        return best;
+    }
+    var out = best;
+    out.w = max(best.w, key);
+    let own = abs(sample.yz - camera_motion(centre, sample.x));
+    let own_key = max(own.x, own.y);
+    if own_key <= 3.0e38 && own_key > best.z {
+        out = vec4<f32>(sample.yz, own_key, out.w);
+    }
+    return out;
 }
 
 @compute @workgroup_size(8, 8)
@@ -110,9 +132,10 @@ fn motion_tiles(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var y = gid.y * TILE; y < min((gid.y + 1u) * TILE, frame.height); y++) {
         for (var x = gid.x * TILE; x < min((gid.x + 1u) * TILE, frame.width); x++) {
             let p = y * frame.width + x;
-            best = faster(best, depth_motion(p, false));
+            let centre = vec2<f32>(f32(x), f32(y)) + 0.5;
+            best = faster(best, depth_motion(p, false), centre);
 #if TWO_LAYERS
-            best = faster(best, depth_motion(p, true));
+            best = faster(best, depth_motion(p, true), centre);
 #endif
         }
     }
@@ -131,8 +154,9 @@ fn motion_neighbours(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var x = max(gid.x, r) - r; x <= min(gid.x + r, motion.tiles_x - 1u); x++) {
             let t = tiles[y * motion.tiles_x + x];
             if t.z > best.z {
-                best = t;
+                best = vec4<f32>(t.xyz, best.w);
             }
+            best.w = max(best.w, t.w);
         }
     }
     neighbours[gid.y * motion.tiles_x + gid.x] = best;
@@ -171,16 +195,18 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let own = depth_motion(p, false);
     let near = neighbours[(gid.y / TILE) * motion.tiles_x + gid.x / TILE];
     // The walks: along p's own motion when it moved half a pixel while the shutter was open;
-    // along the neighbourhood's fastest when that moved half a pixel, unless the own walk
-    // passes within half a pixel of where it puts the surfaces that stood at p (the same way,
-    // off the own walk's line by at most the shutter's share of the motion across it).
+    // along the motion of the neighbourhood's surface moving most by itself, when that surface
+    // moved half a pixel by itself and on screen, unless the own walk passes within half a
+    // pixel of where that motion puts the surfaces that stood at p (the same way, off the own
+    // walk's line by at most the shutter's share of the motion across it).
     let speed = length(own.yz);
     let walk_own = own.x > 0.0 && speed * motion.shutter >= 0.5;
     let own_dir = own.yz / speed;
     let near_dir = near.xy / length(near.xy);
     let across = abs(own_dir.x * near.y - own_dir.y * near.x) * motion.shutter;
     let covered = walk_own && dot(own_dir, near.xy) > 0.0 && across <= 0.5;
-    let walk_near = near.z * motion.shutter >= 0.5 && !covered;
+    let near_moves = max(abs(near.x), abs(near.y)) * motion.shutter >= 0.5;
+    let walk_near = near.z * motion.shutter >= 0.5 && near_moves && !covered;
     if !walk_own && !walk_near {
         hdr[p] = image[p];
         return;
@@ -190,7 +216,7 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var sum = vec4<f32>(0.0);
     for (var i = 0u; i < motion.samples; i++) {
         let s = motion.shutter * (f32(i) + jitter) / f32(motion.samples);
-        let bound = 1.4143 * (s * near.z + 1.25) + 1.0;
+        let bound = 1.4143 * (s * near.w + 1.25) + 1.0;
         let reach = u32(min(motion.max_blur * s / motion.shutter, bound));
         var found = image[p];
         var nearest = 3.0e38;

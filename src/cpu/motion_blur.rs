@@ -1,12 +1,12 @@
 //! CPU reference of `wgsl/motion_blur.wgsl`: motion blur of the camera's motion and of moving
 //! geometry, from both layers. It walks each instant's full reach; the kernel stops where the
-//! neighbourhood's fastest motion says nothing more can be found, which gives the same image.
+//! neighbourhood's largest motion says nothing more can be found, which gives the same image.
 
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::cpu::composite::layer1_radiance;
 use crate::cpu::spiral::pixel_hash;
-use crate::frame::{MOTION_TILE, MotionBlurUniform};
+use crate::frame::{FrameUniform, MOTION_TILE, MotionBlurUniform};
 use crate::gbuffer::GSample;
 
 /// What `motion_blur_main` reads: the constants, both layers, layer 1's direct radiance and the
@@ -14,6 +14,8 @@ use crate::gbuffer::GSample;
 pub struct MotionBlurInputs<'a> {
     /// The constants.
     pub u: &'a MotionBlurUniform,
+    /// The frame's constants (its cameras: the motion the camera alone gives a surface).
+    pub frame: &'a FrameUniform,
     /// Image width and height.
     pub size: (u32, u32),
     /// Layer 0 and layer 1.
@@ -32,22 +34,42 @@ fn stood_at(q: Vec2, m: Vec2, s: f32, centre: Vec2) -> bool {
     d.x.max(d.y) <= 0.75
 }
 
-/// A motion and its largest component, as the kernel's tiles hold them.
+/// What a tile of the kernel holds: the motion of the surface moving most by itself, the
+/// largest component of that own motion, and the largest motion component of any surface.
 #[derive(Clone, Copy, Default)]
 struct Fastest {
     motion: Vec2,
-    key: f32,
+    own: f32,
+    any: f32,
+}
+
+/// As `camera_motion`.
+fn camera_motion(f: &FrameUniform, centre: Vec2, d: f32) -> Vec2 {
+    let (pc, _) = f.reproject(centre, d);
+    if pc.w.is_nan() || pc.w <= 1e-20 {
+        return Vec2::ZERO;
+    }
+    let prev = Vec2::new(
+        (pc.x / pc.w * 0.5 + 0.5) * f.width as f32,
+        (0.5 - pc.y / pc.w * 0.5) * f.height as f32,
+    );
+    centre - prev
 }
 
 impl Fastest {
     /// As `faster`.
-    fn faster(self, s: &GSample) -> Fastest {
+    fn faster(self, f: &FrameUniform, s: &GSample, centre: Vec2) -> Fastest {
         let key = s.motion.x.abs().max(s.motion.y.abs());
-        if s.depth > 0.0 && key <= 3.0e38 && key > self.key {
-            Fastest { motion: s.motion, key }
-        } else {
-            self
+        if s.depth.is_nan() || s.depth <= 0.0 || key.is_nan() || key > 3.0e38 {
+            return self;
         }
+        let mut out = Fastest { any: self.any.max(key), ..self };
+        let own = (s.motion - camera_motion(f, centre, s.depth)).abs();
+        let own_key = own.x.max(own.y);
+        if own_key <= 3.0e38 && own_key > self.own {
+            out = Fastest { motion: s.motion, own: own_key, ..out };
+        }
+        out
     }
 }
 
@@ -62,9 +84,10 @@ impl MotionBlurInputs<'_> {
             for x in 0..w {
                 let t = &mut tiles[((y / MOTION_TILE) * tx + x / MOTION_TILE) as usize];
                 let p = (y * w + x) as usize;
-                *t = t.faster(&self.layers[0][p]);
+                let centre = Vec2::new(x as f32, y as f32) + 0.5;
+                *t = t.faster(self.frame, &self.layers[0][p], centre);
                 if self.two_layers {
-                    *t = t.faster(&self.layers[1][p]);
+                    *t = t.faster(self.frame, &self.layers[1][p], centre);
                 }
             }
         }
@@ -76,9 +99,10 @@ impl MotionBlurInputs<'_> {
                 for ny in y.saturating_sub(r)..=(y + r).min(ty - 1) {
                     for nx in x.saturating_sub(r)..=(x + r).min(tx - 1) {
                         let t = tiles[(ny * tx + nx) as usize];
-                        if t.key > best.key {
-                            best = t;
+                        if t.own > best.own {
+                            best = Fastest { any: best.any, ..t };
                         }
+                        best.any = best.any.max(t.any);
                     }
                 }
                 near.push(best);
@@ -111,7 +135,8 @@ impl MotionBlurInputs<'_> {
         let near_dir = near.motion / near.motion.length();
         let across = (own_dir.x * near.motion.y - own_dir.y * near.motion.x).abs() * u.shutter;
         let covered = walk_own && own_dir.dot(near.motion) > 0.0 && across <= 0.5;
-        let walk_near = near.key * u.shutter >= 0.5 && !covered;
+        let near_moves = near.motion.x.abs().max(near.motion.y.abs()) * u.shutter >= 0.5;
+        let walk_near = near.own * u.shutter >= 0.5 && near_moves && !covered;
         if !walk_own && !walk_near {
             return self.image[p];
         }
