@@ -292,8 +292,12 @@ pub struct Renderer {
     /// The last frame [`render`](Renderer::render) submitted, still perhaps on the GPU.
     in_flight: Option<wgpu::SubmissionIndex>,
     /// Advanced by [`geometry_changed`](Renderer::geometry_changed): shadow maps drawn before
-    /// it are not reused.
+    /// it are not reused, and the geometry's motion is read from where it stood.
     geometry_generation: u64,
+    /// Advanced by [`geometry_changed`](Renderer::geometry_changed) and
+    /// [`redraw_shadow_maps`](Renderer::redraw_shadow_maps): shadow maps drawn before it are not
+    /// reused.
+    shadow_generation: u64,
 }
 
 impl Renderer {
@@ -422,6 +426,7 @@ impl Renderer {
             environment: None,
             in_flight: None,
             geometry_generation: 0,
+            shadow_generation: 0,
             settings,
         })
     }
@@ -512,6 +517,14 @@ impl Renderer {
     /// objects. Call it once per frame in which positions changed, after writing them.
     pub fn geometry_changed(&mut self) {
         self.geometry_generation += 1;
+        self.shadow_generation += 1;
+    }
+
+    /// Makes the next frame redraw every shadow map, as after
+    /// [`geometry_changed`](Renderer::geometry_changed), without taking the geometry for
+    /// moved: what a benchmark of the shadow maps' cost calls before each frame.
+    pub fn redraw_shadow_maps(&mut self) {
+        self.shadow_generation += 1;
     }
 
     /// The plan for `scene` seen through `camera` under this renderer's settings (what
@@ -533,7 +546,7 @@ impl Renderer {
             plan.passes.splice(i..=i, [PassId::RasterLayer0, PassId::RasterLayer1]);
         }
         if let Some(shadows) = &self.stages.shadows {
-            let lights = shadows.kept(scene, &plan, &self.settings, self.geometry_generation);
+            let lights = shadows.kept(scene, &plan, &self.settings, self.shadow_generation);
             let kept: Vec<PassId> = plan
                 .passes
                 .iter()
@@ -623,7 +636,7 @@ impl Renderer {
         self.recorded = rec.finish();
         debug_assert_eq!(self.recorded, plan.passes, "the recorded passes are the plan's");
         if let Some(shadows) = self.stages.shadows.as_mut() {
-            shadows.drew(scene, &plan, self.geometry_generation);
+            shadows.drew(scene, &plan, self.shadow_generation);
         }
         self.plan = Some(plan);
         self.history = Some(current);

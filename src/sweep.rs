@@ -482,7 +482,7 @@ pub fn measure(
     for i in 0..frames {
         // Every frame pays for its shadow maps, as a scene with moving geometry would: a static
         // scene's kept maps would hide what the shadow settings cost.
-        renderer.geometry_changed();
+        renderer.redraw_shadow_maps();
         renderer.render(device, queue, scene, &at(i))?;
         if i < SETTLE_FRAMES - 1 {
             continue;

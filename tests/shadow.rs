@@ -99,7 +99,9 @@ fn lights_without_shadows_get_no_shadow_map() {
 
 /// A static scene draws its shadow map once: later frames, from any camera, reuse it and light
 /// the scene exactly as a map drawn anew does. Geometry written in place is redrawn after
-/// `geometry_changed`, and a scene uploaded anew is redrawn by itself.
+/// `geometry_changed` (and its motion read), maps asked for are redrawn after
+/// `redraw_shadow_maps` (and nothing taken for moved), and a scene uploaded anew is redrawn by
+/// itself.
 #[test]
 fn a_static_scene_draws_its_shadow_map_once() {
     let g = gpu();
@@ -121,6 +123,13 @@ fn a_static_scene_draws_its_shadow_map_once() {
         assert_eq!(plan.shadow_lights(), vec![(0, "sun")]);
     }
     assert_eq!(direct(&renderer), first, "a kept map lights as the drawn one did");
+    // Asked to, it redraws the map without taking the geometry for moved.
+    renderer.redraw_shadow_maps();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    assert!(shadow_drawn(&renderer), "redraw_shadow_maps redraws the map");
+    let flags = renderer.frame_uniform().unwrap().flags;
+    assert_eq!(flags & deep_gbuffer::frame::FRAME_OBJECT_MOTION, 0, "nothing moved");
+    assert_eq!(direct(&renderer), first);
 
     // The occluder moves by half a unit, written into the scene's own buffer.
     let (moved, _) = occluder_scene(0.5);
@@ -129,6 +138,8 @@ fn a_static_scene_draws_its_shadow_map_once() {
     renderer.geometry_changed();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     assert!(shadow_drawn(&renderer), "geometry_changed redraws the map");
+    let flags = renderer.frame_uniform().unwrap().flags;
+    assert_ne!(flags & deep_gbuffer::frame::FRAME_OBJECT_MOTION, 0, "the occluder moved");
     let redrawn = direct(&renderer);
     assert_ne!(redrawn, first, "the shadow moved");
     let fresh = render(&moved, &camera, settings.clone());

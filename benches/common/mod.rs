@@ -71,7 +71,7 @@ impl PassTotals {
 /// Renders `iters` frames, through `cameras` in turn, and adds each pass's GPU time to
 /// `totals`; returns the frames' summed GPU milliseconds (every pass), which is what criterion
 /// is given. Each frame redraws its shadow maps, as a frame of a scene whose geometry moves does
-/// (a static scene keeps them: see `Renderer::geometry_changed`), so that their cost shows.
+/// (a static scene keeps them: see `Renderer::redraw_shadow_maps`), so that their cost shows.
 pub fn timed_frames(
     gpu: &Gpu,
     renderer: &mut Renderer,
@@ -82,7 +82,7 @@ pub fn timed_frames(
 ) -> f64 {
     let mut sum = 0.0;
     for _ in 0..iters {
-        renderer.geometry_changed();
+        renderer.redraw_shadow_maps();
         let camera = &cameras[totals.frames as usize % cameras.len()];
         renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
         for t in renderer.timings(&gpu.device).unwrap() {

@@ -45,10 +45,41 @@ impl Fill {
         source: &wgpu::Buffer,
         buffer: &wgpu::Buffer,
     ) {
-        debug_assert!(source.size() / 4 >= u64::from(self.count), "a copy of a shorter buffer");
-        debug_assert!(buffer.size() / 4 >= u64::from(self.count), "a copy into a shorter buffer");
-        let pipeline = pipelines.get(device, "fill", "copy", &[], &[]);
-        let entries = [(slot::PARAMS, &self.uniform), (slot::DATA, buffer), (slot::SOURCE, source)];
+        self.record_from(device, pipelines, pass, "copy", [source, source], buffer);
+    }
+
+    /// Records `buffer = 2 source - earlier` over this fill's words, as f32s (the value is
+    /// unused).
+    pub(crate) fn record_extrapolate(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &Pipelines,
+        pass: &mut wgpu::ComputePass<'_>,
+        [source, earlier]: [&wgpu::Buffer; 2],
+        buffer: &wgpu::Buffer,
+    ) {
+        self.record_from(device, pipelines, pass, "extrapolate", [source, earlier], buffer);
+    }
+
+    fn record_from(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &Pipelines,
+        pass: &mut wgpu::ComputePass<'_>,
+        entry: &'static str,
+        [source, earlier]: [&wgpu::Buffer; 2],
+        buffer: &wgpu::Buffer,
+    ) {
+        let words = u64::from(self.count);
+        debug_assert!(source.size() / 4 >= words && earlier.size() / 4 >= words, "short input");
+        debug_assert!(buffer.size() / 4 >= words, "a short output");
+        let pipeline = pipelines.get(device, "fill", entry, &[], &[]);
+        let entries = [
+            (slot::PARAMS, &self.uniform),
+            (slot::DATA, buffer),
+            (slot::SOURCE, source),
+            (slot::EARLIER, earlier),
+        ];
         pipeline.dispatch(device, pass, &entries, gpu::dispatch_size(self.count.div_ceil(256)));
     }
 }

@@ -91,7 +91,8 @@ pub(crate) struct FrameContext<'a> {
     pub raster: &'a raster::RasterStage,
     /// The G-buffer layers.
     pub gbuffer: [&'a wgpu::Buffer; 2],
-    /// The vertex positions of the last frame, for the motion of moving geometry.
+    /// The vertex positions of the last frame, when the geometry moved since (the motion of
+    /// moving geometry, the positions `Predict` extrapolates).
     pub previous_positions: Option<&'a wgpu::Buffer>,
     /// The shadow maps, when the plan draws them.
     pub shadows: Option<direct::ShadowInputs<'a>>,

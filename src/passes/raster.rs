@@ -91,6 +91,8 @@ pub(crate) struct Draw<'a> {
     pub opaque: Option<&'a wgpu::Buffer>,
     /// Where a peel writes the indirect arguments of its per-pixel kernels (Peel).
     pub peel_args: Option<&'a wgpu::Buffer>,
+    /// Vertex positions to draw instead of the scene's.
+    pub positions: Option<&'a wgpu::Buffer>,
 }
 
 impl<'a> Draw<'a> {
@@ -105,6 +107,7 @@ impl<'a> Draw<'a> {
             counts: None,
             opaque: None,
             peel_args: None,
+            positions: None,
         }
     }
 }
@@ -203,7 +206,7 @@ impl Rasterizer {
         let b = scene.buffers();
         let mut entries = vec![
             (slot::FRAME, frame),
-            (slot::POSITIONS, &b.positions),
+            (slot::POSITIONS, t.positions.unwrap_or(&b.positions)),
             (slot::INDICES, &b.indices),
             (slot::TRI_MATERIALS, &b.triangle_materials),
             (slot::MATERIALS, &b.materials),
@@ -273,6 +276,9 @@ pub(crate) struct RasterStage {
     /// Which `vis0` holds this (or, between frames, the last) frame's layer 0.
     current: usize,
     fill: Fill,
+    /// The vertex positions `Predict` expects the next frame to have, moving as they moved
+    /// since the last (drawn by `raster.next` when the geometry moved), and their extrapolation.
+    predicted: Option<(wgpu::Buffer, Fill)>,
 }
 
 impl RasterStage {
@@ -289,6 +295,7 @@ impl RasterStage {
             fill: Fill::new(device, vis1.size(), u32::MAX),
             vis1,
             current: 0,
+            predicted: None,
         }
     }
 
@@ -305,6 +312,12 @@ impl RasterStage {
         self.current = 1 - self.current;
         if let Some(next) = next {
             queue.write_buffer(&self.next_frame, 0, bytemuck::bytes_of(next));
+            let bytes = u64::from(scene.counts().2) * 12;
+            if self.predicted.as_ref().is_none_or(|(b, _)| b.size() < bytes.max(16)) {
+                let label = "deep-gbuffer.raster.predicted";
+                let buffer = gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+                self.predicted = Some((buffer, Fill::new(device, bytes, 0)));
+            }
         }
     }
 
@@ -354,7 +367,26 @@ impl Stage for RasterStage {
             PassId::RasterLayer0 => Draw { vis0: Some(vis0), ..draw(RasterMode::Layer0) },
             PassId::RasterNext => {
                 self.fill.record(ctx.device, ctx.pipelines, &mut pass, &self.next);
-                Draw { vis0: Some(&self.next), ..Draw::new(&self.next_frame, RasterMode::Layer0) }
+                let mut step = Draw {
+                    vis0: Some(&self.next),
+                    ..Draw::new(&self.next_frame, RasterMode::Layer0)
+                };
+                // Predict: the geometry moves on as it moved since the last frame.
+                if let (Layer1Variant::Predict, Some(earlier), Some((predicted, extrapolate))) =
+                    (ctx.settings.layer1, ctx.previous_positions, self.predicted.as_ref())
+                {
+                    let now = &ctx.scene.buffers().positions;
+                    let (device, pipelines) = (ctx.device, ctx.pipelines);
+                    extrapolate.record_extrapolate(
+                        device,
+                        pipelines,
+                        &mut pass,
+                        [now, earlier],
+                        predicted,
+                    );
+                    step.positions = Some(predicted);
+                }
+                step
             }
             PassId::RasterLayer1 => {
                 Draw { vis1: Some(vis1), zref: Some(vis0), ..draw(RasterMode::Layer1) }

@@ -26,6 +26,8 @@ struct Positions {
     generation: u64,
     /// This frame copies the positions (into `copies[latest]`).
     copy: bool,
+    /// The geometry moved since the last frame (`copies[latest ^ 1]` holds where it stood).
+    moved: bool,
     /// The copy of the vertex words.
     fill: Fill,
 }
@@ -70,6 +72,7 @@ impl ResolveStage {
         match self.positions.as_mut() {
             Some(p) if p.of == *positions => {
                 p.copy = moved;
+                p.moved = moved;
                 if moved {
                     p.latest ^= 1;
                     p.generation = generation;
@@ -87,6 +90,7 @@ impl ResolveStage {
                     latest: 0,
                     generation,
                     copy: true,
+                    moved: false,
                     fill: Fill::new(device, bytes, 0),
                 });
             }
@@ -94,20 +98,30 @@ impl ResolveStage {
         moved
     }
 
-    /// The positions of the last frame (this frame's own on a scene's first frame).
+    /// The vertex positions of the last frame, when the geometry moved since.
     pub(crate) fn previous(&self) -> Option<&wgpu::Buffer> {
-        self.positions.as_ref().map(|p| &p.copies[if p.copy { p.latest ^ 1 } else { p.latest }])
+        self.positions.as_ref().filter(|p| p.moved).map(|p| &p.copies[p.latest ^ 1])
     }
 }
 
 impl Stage for ResolveStage {
+    /// Copies this frame's positions, before any pass reads the copies.
+    fn begin(&self, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        let Some(p) = self.positions.as_ref().filter(|p| p.copy) else { return };
+        if !ctx.plan.contains(&PassId::Resolve) {
+            return;
+        }
+        let mut pass = rec.encoder().begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("deep-gbuffer.resolve.positions"),
+            timestamp_writes: None,
+        });
+        let into = &p.copies[p.latest];
+        p.fill.record_copy(ctx.device, ctx.pipelines, &mut pass, &ctx.scene.b.positions, into);
+    }
+
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Resolve);
         let mut pass = rec.pass(id);
-        if let Some(p) = self.positions.as_ref().filter(|p| p.copy) {
-            let into = &p.copies[p.latest];
-            p.fill.record_copy(ctx.device, ctx.pipelines, &mut pass, &ctx.scene.b.positions, into);
-        }
         let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
         for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
             resolve_layer(ctx, &mut pass, vis, gbuffer, None);
