@@ -300,6 +300,25 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     assert_eq!(String::from_utf8_lossy(&bad.stderr).trim().lines().count(), 1);
 }
 
+/// Runs `sweep` of the Cornell box at 24x18 with 4 rays per pixel and `args` into `dir`; returns
+/// its CSV header and rows, and its Markdown table.
+fn sweep_cornell(dir: &std::path::Path, args: &[&str]) -> (Vec<String>, Vec<Vec<String>>, String) {
+    let output = cli()
+        .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap().split(',').map(str::to_string).collect();
+    let rows = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+    (header, rows, md)
+}
+
 /// `sweep` on a tiny grid writes a well-formed CSV (one row per configuration, every value a
 /// number, every effect's error, instability and the image's SSIM), the Markdown table and the
 /// plot; re-running it gives the same errors.
@@ -307,24 +326,13 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
 fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
     let run = |name: &str| {
         let dir = out_dir(name);
-        let output = cli()
-            .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
-            .args(["--ao-estimator", "bitmask", "--ao-samples", "4,8"])
-            .args(["--radiosity-samples", "5", "--layers", "1,2"])
-            .args(["--precision", "full", "--out"])
-            .arg(&dir)
-            .output()
-            .unwrap();
-        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-        let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
-        let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
+        let args = ["--ao-estimator", "bitmask", "--ao-samples", "4,8", "--radiosity-samples", "5"];
+        let (header, rows, md) =
+            sweep_cornell(&dir, &[&args[..], &["--layers", "1,2", "--precision", "full"]].concat());
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
         let png = image::open(dir.join("pareto.png")).unwrap();
         assert_eq!((png.width(), png.height()), (900, 600));
         assert_eq!(md.lines().filter(|l| l.starts_with("| ") && !l.contains("taps")).count(), 4);
-        let mut lines = csv.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let rows: Vec<Vec<String>> =
-            lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
         assert_eq!(rows.len(), 4, "2 tap counts x 2 layer counts");
         for column in [
             "ao_estimator",
@@ -371,22 +379,11 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
 #[test]
 fn sweep_measures_the_shutter_against_the_truth_over_it() {
     let dir = out_dir("sweep-shutter");
-    let output = cli()
-        .args(["sweep", "builtin:cornell", "--size", "24x18", "--spp", "4"])
-        .args(["--ao-estimator", "bitmask", "--ao-samples", "4", "--radiosity-samples", "5"])
-        .args(["--layers", "2"])
-        .args(["--shutter", "0,1", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
-    let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
+    let args = ["--ao-estimator", "bitmask", "--ao-samples", "4", "--radiosity-samples", "5"];
+    let (header, rows, md) =
+        sweep_cornell(&dir, &[&args[..], &["--layers", "2", "--shutter", "0,1"]].concat());
     assert!(md.contains("| shutter |"), "{md}");
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let column = |row: &[&str], name: &str| -> f64 {
+    let column = |row: &[String], name: &str| -> f64 {
         let i = header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("{name}"));
         row[i].parse().unwrap()
     };

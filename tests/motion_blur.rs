@@ -22,6 +22,17 @@ fn open(shutter: f32) -> MotionBlurSettings {
     MotionBlurSettings { shutter, ..Default::default() }
 }
 
+/// The columns of row `y` (`w` pixels a row) that the pass changed: one instant of the 64 the
+/// tests take that finds another colour changes a pixel by 1/64.
+fn changed_columns(image: &[Vec4], out: &[Vec4], w: u32, y: u32) -> Vec<u32> {
+    (0..w)
+        .filter(|&x| {
+            let p = (y * w + x) as usize;
+            (out[p] - image[p]).abs().max_element() > 1e-3
+        })
+        .collect()
+}
+
 /// A camera at `x` on the x axis looking down -z.
 fn camera_at(x: f32) -> Camera {
     Camera::perspective(Vec3::new(x, 0.0, 0.0), Vec3::new(x, 0.0, -1.0), 40.0, 0.05)
@@ -120,14 +131,7 @@ fn a_panned_edge_streaks_over_its_motion() {
     let per_unit = cameras[1].pixels_of(1.0, z, h);
     let streak = shutter * step * per_unit;
     assert!(streak > 4.0 && streak < 20.0, "a measurable streak: {streak}");
-    let y = h / 2;
-    let changed: Vec<u32> = (0..w)
-        .filter(|&x| {
-            let p = (y * w + x) as usize;
-            // One instant of the 64 that finds the other colour changes a pixel by 1/64.
-            (out[p] - image[p]).abs().max_element() > 1e-3
-        })
-        .collect();
+    let changed = changed_columns(&image, &out, w, h / 2);
     let (first, last) = (*changed.first().unwrap() as f32, *changed.last().unwrap() as f32 + 1.0);
     let edge = w as f32 / 2.0;
     eprintln!("streak {streak} px; changed columns {first} to {last} around {edge}");
@@ -335,13 +339,7 @@ fn a_moving_object_streaks_over_its_motion() {
     let per_unit = camera.pixels_of(1.0, BAR, h);
     let streak = shutter * by * per_unit;
     let (left, right) = (w as f32 / 2.0 - 0.1 * per_unit, w as f32 / 2.0 + 0.5 * per_unit);
-    let y = h / 2;
-    let changed: Vec<u32> = (0..w)
-        .filter(|&x| {
-            let p = (y * w + x) as usize;
-            (out[p] - image[p]).abs().max_element() > 1e-3
-        })
-        .collect();
+    let changed = changed_columns(&image, &out, w, h / 2);
     eprintln!("streak {streak} px; bar {left} to {right}; changed columns {changed:?}");
     let (first, last) = (*changed.first().unwrap() as f32, *changed.last().unwrap() as f32 + 1.0);
     assert!((first - (left - streak)).abs() <= 1.5, "the trail starts at {first}");
