@@ -306,6 +306,10 @@ struct RadiosityArgs {
     /// depth and normal [default: 1].
     #[arg(long)]
     radiosity_downsample: Option<u32>,
+    /// Damping delta of the indirect light fed back into the next frame's radiosity, in (0, 1]
+    /// [default: 0.8].
+    #[arg(long)]
+    damping: Option<f32>,
 }
 
 impl RadiosityArgs {
@@ -317,6 +321,7 @@ impl RadiosityArgs {
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
+        r.damping = self.damping.unwrap_or(r.damping);
     }
 }
 
@@ -537,9 +542,6 @@ struct RenderArgs {
     /// must stay below 1.
     #[arg(long, default_value = "1,1", value_parser = parse_boost)]
     boost: Boost,
-    /// Damping delta of the indirect light fed back into the next frame's radiosity, in (0, 1].
-    #[arg(long, default_value_t = RadiositySettings::default().damping)]
-    damping: f32,
 }
 
 /// A list's default as the option takes it, comma separated (made once, when the parser is
@@ -1069,7 +1071,6 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     settings.ao.enabled = !args.no_ao;
     settings.radiosity.normalization = args.normalization;
     settings.radiosity.boost = args.boost;
-    settings.radiosity.damping = args.damping;
     settings.effects = Effects::parse(&args.effects)?;
     if let Some(preset) = args.preset {
         preset.apply(&mut settings);
