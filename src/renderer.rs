@@ -233,6 +233,7 @@ impl Stages {
                 .filter(|_| runs(Effect::Shadows))
                 .map(ShadowStage::inputs),
             direct: [self.direct.radiance(0), self.direct.radiance(1)],
+            diffuse: [self.direct.diffuse(0), self.direct.diffuse(1)],
             lighting: &self.direct,
             av: self.ao.as_ref().filter(|_| runs(Effect::Ao)).map(|a| a.av(settings)),
             irradiance: radiosity.map(|r| r.irradiance),
@@ -1069,6 +1070,13 @@ impl Renderer {
     /// read it).
     pub fn direct1_buffer(&self) -> &wgpu::Buffer {
         self.stages.direct.radiance(1)
+    }
+
+    /// The Lambertian part of the direct radiance of `layer` (0 or 1; `vec4<f32>` per pixel,
+    /// written when the radiosity runs): `(1 - metallic) base colour / pi` times the direct
+    /// irradiance, the light the radiosity gather passes on.
+    pub fn diffuse_buffer(&self, layer: usize) -> &wgpu::Buffer {
+        self.stages.direct.diffuse(layer)
     }
 
     /// Reads an f32 per-pixel buffer such as [`ao_buffer`](Renderer::ao_buffer) back.

@@ -54,11 +54,15 @@ fn cornell_direct_and_composite_match_cpu_reference() {
         .unwrap();
     let gpu_atlas: Vec<u64> = bytemuck::pod_collect_to_vec(&gpu_atlas);
     assert!(gpu_atlas == atlas, "the GPU's shadow maps equal the CPU rasterizer's");
-    let expected = cpu_direct::direct(&r.frame, &layer0.samples, &lights, Some(&shadows));
+    let (expected, lambert) =
+        cpu_direct::direct_and_diffuse(&r.frame, &layer0.samples, &lights, Some(&shadows));
     let actual = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
+    let diffuse = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.diffuse_buffer(0)).unwrap();
     let mut lit = 0;
     for (p, (a, b)) in actual.iter().zip(&expected).enumerate() {
         assert!(close(*a, *b), "direct at pixel {p}: gpu {a} cpu {b}");
+        assert!(close(diffuse[p], lambert[p]), "diffuse at {p}: {} {}", diffuse[p], lambert[p]);
+        assert!(lambert[p].cmple(*b + 1e-6).all(), "the Lambertian part is part of it at {p}");
         lit += usize::from(b.max_element() > 0.01);
     }
     assert!(lit > (w * h / 2) as usize, "the light reaches most of the box ({lit})");

@@ -129,12 +129,12 @@ fn first_frame_matches(
     let raw = read4(renderer, raw);
     let layout = PyramidLayout::new(frame.width, frame.height);
     let pixels = layers[0].len();
-    // B without history is boosted direct + emission (direct of layer 0 checked in
-    // tests/direct.rs), held in RGB9E5: within 2^-9 of a texel's largest channel (the format's
-    // rounding) besides f32 rounding.
+    // B without history is the boosted Lambertian part of the direct light + emission (layer 0's
+    // checked in tests/direct.rs), held in RGB9E5: within 2^-9 of a texel's largest channel (the
+    // format's rounding) besides f32 rounding.
     let uniform = RadiosityUniform::new(radiosity, &layout, false, 0);
-    let direct0 = renderer.read_rgb(&g.device, &g.queue, renderer.direct_buffer()).unwrap();
-    let expected_b0 = cpu::feedback_without_history(&uniform, layers[0], &direct0);
+    let diffuse0 = renderer.read_rgb(&g.device, &g.queue, renderer.diffuse_buffer(0)).unwrap();
+    let expected_b0 = cpu::feedback_without_history(&uniform, layers[0], &diffuse0);
     for (p, (t, e)) in source[..pixels].iter().zip(&expected_b0).enumerate() {
         let a = t.radiance(0);
         assert!(

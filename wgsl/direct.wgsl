@@ -4,8 +4,11 @@
 // With SHADOWS, a light with shadow faces is attenuated by percentage-closer filtering of its
 // shadow map ((2 pcf + 1)^2 taps): the point is pushed along its normal by a texel, and compared
 // with a constant plus slope-scaled bias (in texels of the map at that depth).
+// With DIFFUSE the Lambertian part alone ((1 - metallic) base colour / pi times the irradiance,
+// the same in every direction) goes to `diffuse` too: the light the radiosity gather passes on,
+// which does not depend on where the camera is.
 // src/cpu/direct.rs is the same on the CPU.
-// defines: PACKED SHADOWS
+// defines: PACKED SHADOWS DIFFUSE
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -26,6 +29,9 @@ struct Direct {
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
 @group(0) @binding(3) var<storage, read> lights: array<Light>;
 @group(0) @binding(4) var<storage, read_write> radiance: array<vec4<f32>>;
+#if DIFFUSE
+@group(0) @binding(8) var<storage, read_write> diffuse: array<vec4<f32>>;
+#endif
 #if SHADOWS
 @group(0) @binding(5) var<storage, read> faces: array<ShadowFace>;
 // Per light: (first face, face count); count 0 for a light without shadow.
@@ -78,6 +84,9 @@ fn direct_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = sample_at(p);
     if !(s.depth > 0.0) {
         radiance[p] = vec4<f32>(0.0);
+#if DIFFUSE
+        diffuse[p] = vec4<f32>(0.0);
+#endif
         return;
     }
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(gid.xy) + 0.5, s.depth), 1.0)).xyz;
@@ -86,6 +95,7 @@ fn direct_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         v = normalize(frame.inv_view[2].xyz);
     }
     var sum = vec3<f32>(0.0);
+    var irradiance = vec3<f32>(0.0);
     for (var i = 0u; i < direct.light_count; i++) {
         var l: vec3<f32>;
         let e = light_at(lights[i], world, &l);
@@ -96,7 +106,11 @@ fn direct_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             visible = shadow(i, lights[i], world, s.normal, l);
 #endif
             sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl * visible;
+            irradiance += e * nl * visible;
         }
     }
     radiance[p] = vec4<f32>(sum, 1.0);
+#if DIFFUSE
+    diffuse[p] = vec4<f32>((1.0 - s.metallic) * s.base_color / PI * irradiance, 1.0);
+#endif
 }

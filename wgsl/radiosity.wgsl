@@ -1,7 +1,9 @@
 // Screen-space radiosity from both layers, with temporal multi-bounce.
 //
 // radiosity_feedback: B, the outgoing radiance the gather reads: reflected light, boosted, plus
-//   emission, B = boost(rho) (D + delta (1 - metallic) rho / pi * E_prev) + Le, with E_prev the
+//   emission, B = boost(rho) (D + delta (1 - metallic) rho / pi * E_prev) + Le, with D the
+//   Lambertian part of the direct light ((1 - metallic) rho / pi times its irradiance: a
+//   surface's specular highlight goes towards the camera, not to every surface around) and E_prev the
 //   previous frame's filtered irradiance at this point spread over its whole hemisphere (the
 //   irradiance found over the share it covers; reprojected; 0 where there is none) and
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
@@ -98,8 +100,10 @@ fn boost(rho: vec3<f32>) -> f32 {
 @group(0) @binding(1) var<uniform> params: Radiosity;
 @group(0) @binding(2) var<storage, read> gbuffer0: array<GWord>;
 @group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
-@group(0) @binding(4) var<storage, read> direct0: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> direct1: array<vec4<f32>>;
+// The Lambertian part of each layer's direct radiance (the direct kernel's DIFFUSE output): the
+// light a surface sends every way alike, whatever the camera's view of it.
+@group(0) @binding(4) var<storage, read> diffuse0: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> diffuse1: array<vec4<f32>>;
 // The gather source, one texel per pixel at level 0 and a rotated-grid MIP chain above it:
 // (view depth of layer 0, of layer 1, B of layer 0, of layer 1), depths as f32 bits, B in RGB9E5.
 @group(0) @binding(6) var<storage, read_write> source: array<vec4<u32>>;
@@ -168,12 +172,12 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        out0 = boost(s0.base_color) * (direct0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e) + s0.emissive;
+        out0 = boost(s0.base_color) * (diffuse0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e) + s0.emissive;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
     if s1.depth > 0.0 {
-        out1 = boost(s1.base_color) * direct1[p].rgb + s1.emissive;
+        out1 = boost(s1.base_color) * diffuse1[p].rgb + s1.emissive;
     }
     out0 = select(vec3<f32>(0.0), out0, finite3(out0));
     out1 = select(vec3<f32>(0.0), out1, finite3(out1));

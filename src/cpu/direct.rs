@@ -60,7 +60,19 @@ pub fn direct(
     lights: &[GpuLight],
     shadows: Option<&Shadows>,
 ) -> Vec<Vec3> {
+    direct_and_diffuse(f, layer, lights, shadows).0
+}
+
+/// [`direct`], and the Lambertian part alone (the kernel's `DIFFUSE` output: what the radiosity
+/// gather passes on).
+pub fn direct_and_diffuse(
+    f: &FrameUniform,
+    layer: &[GSample],
+    lights: &[GpuLight],
+    shadows: Option<&Shadows>,
+) -> (Vec<Vec3>, Vec<Vec3>) {
     let mut out = vec![Vec3::ZERO; (f.width * f.height) as usize];
+    let mut lambert = out.clone();
     for y in 0..f.height {
         for x in 0..f.width {
             let p = (y * f.width + x) as usize;
@@ -76,6 +88,7 @@ pub fn direct(
                 (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
             };
             let mut sum = Vec3::ZERO;
+            let mut irradiance = Vec3::ZERO;
             for (i, light) in lights.iter().enumerate() {
                 let (e, l) = light_at(light, world);
                 let nl = s.normal.dot(l);
@@ -86,10 +99,12 @@ pub fn direct(
                         * e
                         * nl
                         * visible;
+                    irradiance += e * nl * visible;
                 }
             }
             out[p] = sum;
+            lambert[p] = (1.0 - s.metallic) * s.base_color / PI * irradiance;
         }
     }
-    out
+    (out, lambert)
 }

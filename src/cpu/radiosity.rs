@@ -18,16 +18,17 @@ pub fn boost(u: &RadiosityUniform, rho: Vec3) -> f32 {
     Boost { unsaturated: u.boost_unsaturated, saturated: u.boost_saturated }.of(rho.to_array())
 }
 
-/// B of one layer without history: boosted direct radiance plus emission where there is a
-/// surface.
+/// B of one layer without history: the boosted Lambertian part of the direct radiance
+/// (`diffuse`, [`direct_and_diffuse`](crate::cpu::direct::direct_and_diffuse)) plus emission
+/// where there is a surface.
 pub fn feedback_without_history(
     u: &RadiosityUniform,
     layer: &[GSample],
-    direct: &[Vec3],
+    diffuse: &[Vec3],
 ) -> Vec<Vec3> {
     layer
         .iter()
-        .zip(direct)
+        .zip(diffuse)
         .map(
             |(s, d)| {
                 if s.depth > 0.0 { boost(u, s.base_color) * *d + s.emissive } else { Vec3::ZERO }

@@ -19,10 +19,12 @@ pub(crate) struct ShadowInputs<'a> {
     pub atlas: &'a wgpu::Buffer,
 }
 
-/// Direct radiance of both layers (`vec4<f32>` per pixel) and the kernel's constants.
+/// Direct radiance of both layers (`vec4<f32>` per pixel), its Lambertian part (what the
+/// radiosity passes on) and the kernel's constants.
 pub(crate) struct DirectStage {
     uniform: wgpu::Buffer,
     radiance: [wgpu::Buffer; 2],
+    diffuse: [wgpu::Buffer; 2],
 }
 
 impl DirectStage {
@@ -32,6 +34,10 @@ impl DirectStage {
             |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
         DirectStage {
             uniform: gpu::uniform_buffer_for::<DirectUniform>(device, "deep-gbuffer.direct"),
+            diffuse: [
+                buffer("deep-gbuffer.direct.diffuse"),
+                buffer("deep-gbuffer.direct.diffuse1"),
+            ],
             radiance: [
                 buffer("deep-gbuffer.direct.radiance"),
                 buffer("deep-gbuffer.direct.radiance1"),
@@ -57,12 +63,18 @@ impl DirectStage {
     pub(crate) fn radiance(&self, layer: usize) -> &wgpu::Buffer {
         &self.radiance[layer.min(1)]
     }
+
+    /// The Lambertian part of the direct radiance of `layer` (written when the radiosity runs;
+    /// zero where no light runs).
+    pub(crate) fn diffuse(&self, layer: usize) -> &wgpu::Buffer {
+        &self.diffuse[layer.min(1)]
+    }
 }
 
 impl Stage for DirectStage {
     fn begin(&self, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         if !ctx.plan.runs(Effect::Direct) {
-            for radiance in &self.radiance {
+            for radiance in self.radiance.iter().chain(&self.diffuse) {
                 rec.encoder().clear_buffer(radiance, 0, None);
             }
         }
@@ -80,26 +92,32 @@ impl Stage for DirectStage {
         } else {
             1
         };
+        let diffuse = plan.runs(Effect::Radiosity);
         for layer in 0..layers {
-            self.light(ctx, &mut pass, ctx.gbuffer[layer], &self.radiance[layer], None);
+            let targets = (&self.radiance[layer], diffuse.then_some(&self.diffuse[layer]));
+            self.light(ctx, &mut pass, ctx.gbuffer[layer], targets, None);
         }
     }
 }
 
 impl DirectStage {
-    /// Records the direct light of G-buffer layer `gbuffer` into `radiance`, over the whole
-    /// image or with the workgroups `args` holds (8x8 pixels each).
+    /// Records the direct light of G-buffer layer `gbuffer` into `radiance` (and its
+    /// Lambertian part into `diffuse`, when given), over the whole image or with the workgroups
+    /// `args` holds (8x8 pixels each).
     pub(crate) fn light(
         &self,
         ctx: &FrameContext<'_>,
         pass: &mut wgpu::ComputePass<'_>,
         gbuffer: &wgpu::Buffer,
-        radiance: &wgpu::Buffer,
+        (radiance, diffuse): (&wgpu::Buffer, Option<&wgpu::Buffer>),
         args: Option<&wgpu::Buffer>,
     ) {
         let mut defines = ctx.settings.precision.defines();
         if ctx.shadows.is_some() {
             defines.push("SHADOWS");
+        }
+        if diffuse.is_some() {
+            defines.push("DIFFUSE");
         }
         let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
         let mut entries = vec![
@@ -109,6 +127,9 @@ impl DirectStage {
             (slot::LIGHTS, ctx.scene.light_buffer()),
             (slot::RADIANCE, radiance),
         ];
+        if let Some(diffuse) = diffuse {
+            entries.push((slot::DIFFUSE, diffuse));
+        }
         if let Some(s) = &ctx.shadows {
             entries.extend([
                 (slot::FACES, s.faces),

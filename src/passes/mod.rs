@@ -98,6 +98,8 @@ pub(crate) struct FrameContext<'a> {
     pub shadows: Option<direct::ShadowInputs<'a>>,
     /// Direct radiance of each layer.
     pub direct: [&'a wgpu::Buffer; 2],
+    /// Its Lambertian part, of each layer (written when the radiosity runs).
+    pub diffuse: [&'a wgpu::Buffer; 2],
     /// The direct-light stage, which lights other G-buffers too (the transparency's peels).
     pub lighting: &'a direct::DirectStage,
     /// The ambient visibility the composite reads, when obscurance runs.
