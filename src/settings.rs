@@ -22,7 +22,9 @@ pub enum Layer1Variant {
     /// One pass, layer 1 against a layer 0 the frame before drew from this frame's predicted
     /// camera: the last camera motion repeated (view matrix `V_t V_{t-1}^-1 V_t`; exact for a
     /// camera moving at constant linear and angular velocity). Costs a layer-0 raster per frame
-    /// (`raster.next`); geometry is predicted to stay where it is.
+    /// (`raster.next`); geometry that moved since the last frame
+    /// ([`Renderer::geometry_changed`](crate::Renderer::geometry_changed)) is drawn moved on as
+    /// it moved (each vertex at `2 p_t - p_{t-1}`).
     Predict,
     /// One pass with one frame of latency: each frame draws the layer 0 of the camera it is
     /// given (`raster.next`) and shows the camera given the frame before, whose layer 0 is then
