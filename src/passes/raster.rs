@@ -278,7 +278,7 @@ pub(crate) struct RasterStage {
     fill: Fill,
     /// The vertex positions `Predict` expects the next frame to have, moving as they moved
     /// since the last (drawn by `raster.next` when the geometry moved), and their extrapolation.
-    predicted: Option<(wgpu::Buffer, Fill)>,
+    predicted: Option<(wgpu::Buffer, Fill, u64)>,
 }
 
 impl RasterStage {
@@ -313,10 +313,10 @@ impl RasterStage {
         if let Some(next) = next {
             queue.write_buffer(&self.next_frame, 0, bytemuck::bytes_of(next));
             let bytes = u64::from(scene.counts().2) * 12;
-            if self.predicted.as_ref().is_none_or(|(b, _)| b.size() < bytes.max(16)) {
+            if self.predicted.as_ref().is_none_or(|p| p.2 != bytes) {
                 let label = "deep-gbuffer.raster.predicted";
                 let buffer = gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
-                self.predicted = Some((buffer, Fill::new(device, bytes, 0)));
+                self.predicted = Some((buffer, Fill::new(device, bytes, 0), bytes));
             }
         }
     }
@@ -372,7 +372,7 @@ impl Stage for RasterStage {
                     ..Draw::new(&self.next_frame, RasterMode::Layer0)
                 };
                 // Predict: the geometry moves on as it moved since the last frame.
-                if let (Layer1Variant::Predict, Some(earlier), Some((predicted, extrapolate))) =
+                if let (Layer1Variant::Predict, Some(earlier), Some((predicted, extrapolate, _))) =
                     (ctx.settings.layer1, ctx.previous_positions, self.predicted.as_ref())
                 {
                     let now = &ctx.scene.buffers().positions;

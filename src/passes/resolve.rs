@@ -28,8 +28,9 @@ struct Positions {
     copy: bool,
     /// The geometry moved since the last frame (`copies[latest ^ 1]` holds where it stood).
     moved: bool,
-    /// The copy of the vertex words.
+    /// The copy of the vertex words, and their bytes.
     fill: Fill,
+    bytes: u64,
 }
 
 impl ResolveStage {
@@ -51,9 +52,10 @@ impl ResolveStage {
     /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed) was called since
     /// (its count is `generation`) and that frame had the same scene.
     pub(crate) fn moved(&self, scene: &SceneBuffers, generation: u64) -> bool {
-        self.positions
-            .as_ref()
-            .is_some_and(|p| p.of == scene.buffers().positions && p.generation != generation)
+        let bytes = u64::from(scene.counts().2) * 12;
+        self.positions.as_ref().is_some_and(|p| {
+            p.of == scene.buffers().positions && p.bytes == bytes && p.generation != generation
+        })
     }
 
     /// Makes ready the copies of `scene`'s positions for a frame at `generation`; returns
@@ -70,7 +72,7 @@ impl ResolveStage {
         let positions = &scene.buffers().positions;
         let bytes = u64::from(scene.counts().2) * 12;
         match self.positions.as_mut() {
-            Some(p) if p.of == *positions => {
+            Some(p) if p.of == *positions && p.bytes == bytes => {
                 p.copy = moved;
                 p.moved = moved;
                 if moved {
@@ -92,6 +94,7 @@ impl ResolveStage {
                     copy: true,
                     moved: false,
                     fill: Fill::new(device, bytes, 0),
+                    bytes,
                 });
             }
         }
