@@ -200,7 +200,7 @@ fn motion_blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // pixel of where that motion puts the surfaces that stood at p (the same way, off the own
     // walk's line by at most the shutter's share of the motion across it).
     let speed = length(own.yz);
-    let walk_own = own.x > 0.0 && speed * motion.shutter >= 0.5;
+    let walk_own = own.x > 0.0 && speed * motion.shutter >= 0.5 && speed <= 3.0e38;
     let own_dir = own.yz / speed;
     let near_dir = near.xy / length(near.xy);
     let across = abs(own_dir.x * near.y - own_dir.y * near.x) * motion.shutter;

@@ -130,7 +130,7 @@ impl MotionBlurInputs<'_> {
         let p = (y * self.size.0 + x) as usize;
         let own = &self.layers[0][p];
         let speed = own.motion.length();
-        let walk_own = own.depth > 0.0 && speed * u.shutter >= 0.5;
+        let walk_own = own.depth > 0.0 && speed * u.shutter >= 0.5 && speed <= 3.0e38;
         let own_dir = own.motion / speed;
         let near_dir = near.motion / near.motion.length();
         let across = (own_dir.x * near.motion.y - own_dir.y * near.motion.x).abs() * u.shutter;
