@@ -567,12 +567,6 @@ fn parse_boost(s: &str) -> std::result::Result<Boost, String> {
     Ok(Boost { unsaturated: parse(a)?, saturated: parse(b)? })
 }
 
-/// Writes `positions` into the scene's position buffer (as a host moves objects).
-fn write_positions(queue: &wgpu::Queue, buffers: &SceneBuffers, positions: &[Vec3]) {
-    let words: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
-    queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&words));
-}
-
 fn parse_move(s: &str) -> std::result::Result<(String, Vec3), String> {
     let (name, by) = s.rsplit_once(':').ok_or_else(|| format!("`{s}` is not MATERIAL:DX,DY,DZ"))?;
     let by: Vec<f32> = by
@@ -744,7 +738,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
             let at = if last || args.turn == 0.0 { &camera } else { &before };
             if let Some(positions) = &positions_before {
                 let now = if last { &scene.positions } else { positions };
-                write_positions(&gpu.queue, &buffers, now);
+                buffers.write_positions(&gpu.queue, now)?;
                 renderer.geometry_changed();
             }
             renderer.render(&gpu.device, &gpu.queue, &buffers, at)?;
@@ -1123,7 +1117,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         camera = start.orbited(args.orbit * turn);
         if let Some((material, by)) = moving {
             let back = (frames - 1 - i) as f32;
-            write_positions(&gpu.queue, &buffers, &scene.positions_moved(material, -by * back)?);
+            buffers.write_positions(&gpu.queue, &scene.positions_moved(material, -by * back)?)?;
             renderer.geometry_changed();
         }
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;

@@ -133,8 +133,9 @@ fn a_static_scene_draws_its_shadow_map_once() {
 
     // The occluder moves by half a unit, written into the scene's own buffer.
     let (moved, _) = occluder_scene(0.5);
-    let positions: Vec<f32> = moved.positions.iter().flat_map(|p| p.to_array()).collect();
-    g.queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&positions));
+    buffers.write_positions(&g.queue, &moved.positions).unwrap();
+    let short = buffers.write_positions(&g.queue, &moved.positions[1..]);
+    assert!(matches!(short, Err(deep_gbuffer::Error::InvalidScene(_))), "{short:?}");
     renderer.geometry_changed();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     assert!(shadow_drawn(&renderer), "geometry_changed redraws the map");

@@ -376,6 +376,21 @@ impl SceneBuffers {
         &self.b
     }
 
+    /// Writes new vertex positions into the scene's position buffer, as a host moves objects
+    /// (then [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)); one per vertex.
+    pub fn write_positions(&self, queue: &wgpu::Queue, positions: &[glam::Vec3]) -> Result<()> {
+        if positions.len() != self.b.vertex_count as usize {
+            return Err(Error::InvalidScene(format!(
+                "{} positions for {} vertices",
+                positions.len(),
+                self.b.vertex_count
+            )));
+        }
+        let words: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
+        queue.write_buffer(&self.b.positions, 0, bytemuck::cast_slice(&words));
+        Ok(())
+    }
+
     /// Triangles.
     pub fn triangle_count(&self) -> u32 {
         self.b.triangle_count

@@ -58,8 +58,7 @@ pub fn render_moving(
     let buffers = SceneBuffers::upload(&g.device, scene).expect("upload");
     let mut renderer = Renderer::new(&g.device, &g.queue, settings).expect("renderer");
     for (i, frame) in positions.iter().enumerate() {
-        let words: Vec<f32> = frame.iter().flat_map(|p| p.to_array()).collect();
-        g.queue.write_buffer(&buffers.buffers().positions, 0, bytemuck::cast_slice(&words));
+        buffers.write_positions(&g.queue, frame).expect("one position per vertex");
         if i > 0 {
             renderer.geometry_changed();
         }
