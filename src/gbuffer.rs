@@ -120,7 +120,8 @@ fn unpack2x16float(w: u32) -> Vec2 {
     Vec2::new(f16_to_f32(w as u16), f16_to_f32((w >> 16) as u16))
 }
 
-fn unpack2x16snorm(w: u32) -> Vec2 {
+/// WGSL's `unpack2x16snorm`.
+pub(crate) fn unpack2x16snorm(w: u32) -> Vec2 {
     let c = |v: u16| (f32::from(v as i16) / 32767.0).max(-1.0);
     Vec2::new(c(w as u16), c((w >> 16) as u16))
 }

@@ -310,6 +310,11 @@ struct RadiosityArgs {
     /// [default: 0.8].
     #[arg(long)]
     damping: Option<f32>,
+    /// Take a surface's outgoing light only where it faces the gathering point; a slices
+    /// gather takes the indirect light a surface reflects from its far side (see
+    /// `RadiositySettings::normal_test`) [default: on].
+    #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
+    radiosity_normal_test: Option<bool>,
 }
 
 impl RadiosityArgs {
@@ -322,6 +327,7 @@ impl RadiosityArgs {
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
         r.damping = self.damping.unwrap_or(r.damping);
+        r.normal_test = self.radiosity_normal_test.unwrap_or(r.normal_test);
     }
 }
 

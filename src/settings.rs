@@ -340,8 +340,12 @@ pub struct RadiositySettings {
     /// along the previous view axis) of the previous layer 0, whose irradiance the history
     /// holds (a point hidden last frame has no history).
     pub history_tolerance: f32,
-    /// Count a tap only if its surface faces the gathering point (w.n_Y < 0; `spiral` only: the
-    /// slices take every surface they find as solid).
+    /// Take a surface's outgoing light only where it faces the gathering point (w.n_Y < 0).
+    /// `spiral`: other taps do not count. `slices`: a surface facing away still hides what lies
+    /// behind it, and sends what its far side sends instead of what the camera sees of it: the
+    /// indirect light it reflects (none on the first frame, and none from layer 1), not its
+    /// direct light (a sphere lit from above, seen from the ground beside it, shows the ground
+    /// its dark side). Off, every surface sends its visible side's light both ways.
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,

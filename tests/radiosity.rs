@@ -145,6 +145,16 @@ fn first_frame_matches(
         for (l, layer) in layers.iter().enumerate() {
             let depth = layer[p].depth;
             assert_eq!(t.depth(l).to_bits(), depth.to_bits(), "{what}: depth of layer {l}");
+            // The normal in 2x16 snorm (a few 1e-5 off); no far-side light without history.
+            let normal = layer[p].normal;
+            assert!(
+                depth.is_nan()
+                    || depth <= 0.0
+                    || (t.normal(l) - normal).abs().max_element() <= 1e-3,
+                "{what}: normal of layer {l}: {} vs {normal}",
+                t.normal(l)
+            );
+            assert_eq!(t.hidden(l), glam::Vec3::ZERO, "{what}: far side of layer {l}");
         }
     }
     // The levels above pick texels of the GPU's own level 0, exactly.

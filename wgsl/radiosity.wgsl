@@ -8,13 +8,20 @@
 //   irradiance found over the share it covers; reprojected; 0 where there is none) and
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
 //   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
-//   It writes level 0 of the gather source: both layers' view depths and B in RGB9E5, 16 bytes
-//   a pixel, the only thing the taps read.
+//   It writes level 0 of the gather source, 32 bytes a pixel and the only thing the taps
+//   read: both layers' view depths, B in RGB9E5, normals (octahedral, 2x16 snorm) and H, the
+//   radiance of the surface's far side (below).
 // radiosity_source_level: the levels above, a rotated-grid MIP chain as the obscurance's depth
 //   pyramid (each texel one real pixel's depths and B). A tap h pixels away reads level
 //   floor(log2 h) - mip_offset (the slices never coarser than their step spacing) and its point
 //   is reconstructed at the pixel that texel came from: far taps read a small, cache-friendly
 //   level, and the work per tap is one 16-byte load.
+// With the normal test (the default), a surface a step finds may face away from X (n_Y . (X - Y) <= 0): X then sees the far side of
+// its solid, not the side the camera sees, and the light the camera's side sends (its direct
+// light above all: a sphere lit from above seen from the ground beside it) does not reach X.
+// Such a surface still hides its sectors but sends H, the part of B that does not depend on
+// which way the surface faces: the indirect light it reflects, boost delta (1 - metallic) rho /
+// pi E_prev on layer 0 (0 on layer 1, which has no irradiance of its own, and on the first frame).
 // radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
 //   world-space radius, Y from layer 0, or from layer 1 where the layer-0 point fails; a tap
 //   counts only with w.n_X > 0 and, unless the test is off, w.n_Y < 0 (Y faces X). With M the
@@ -28,8 +35,9 @@
 //   shared/slices.wgsl instead: steps out to the world-space radius read both layers' points at
 //   full resolution, each point's solid (`thickness` deep, layer 0's no deeper than layer 1's
 //   surface) hides an arc of sectors, and the sectors a point hides first take its B: each
-//   surface's light arrives at the cosine-weighted solid angle it subtends from X, and none
-//   through a surface that hides it. With g = B in the slices' sum the surfaces deliver
+//   surface's light arrives at the cosine-weighted solid angle it subtends from X, none
+//   through a surface that hides it, and (with the normal test, the default) a surface facing
+//   away sends H. With g = B in the slices' sum the surfaces deliver
 //     E_seen = (pi / S) sum_slices |n_p| W_total / SECTORS sum_sectors B
 //   over the share c = (1 / S) sum_slices |n_p| W_total / SECTORS (sectors hidden) of the
 //   cosine-weighted hemisphere, and writes E_seen and c: the directions no surface covers are
@@ -105,8 +113,19 @@ fn boost(rho: vec3<f32>) -> f32 {
 @group(0) @binding(4) var<storage, read> diffuse0: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> diffuse1: array<vec4<f32>>;
 // The gather source, one texel per pixel at level 0 and a rotated-grid MIP chain above it:
-// (view depth of layer 0, of layer 1, B of layer 0, of layer 1), depths as f32 bits, B in RGB9E5.
-@group(0) @binding(6) var<storage, read_write> source: array<vec4<u32>>;
+// Mirrors `SourceTexel` in src/frame/source.rs.
+struct SourceTexel {
+    // View depths of layer 0 and 1 as f32 bits (0: no surface).
+    depth: vec2<u32>,
+    // B of each layer in RGB9E5.
+    radiance: vec2<u32>,
+    // World-space normal of each layer, octahedral in 2x16 snorm (0 where there is no surface).
+    normal: vec2<u32>,
+    // H of each layer in RGB9E5: what the surface's far side sends.
+    hidden: vec2<u32>,
+}
+
+@group(0) @binding(6) var<storage, read_write> source: array<SourceTexel>;
 @group(0) @binding(7) var<uniform> level: PyramidLevel;
 @group(0) @binding(8) var<storage, read_write> raw: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
@@ -157,6 +176,14 @@ fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<
     return h;
 }
 
+// A sample's normal as the gather source holds it (0 where there is no surface).
+fn pack_normal(s: GSample) -> u32 {
+    if !(s.depth > 0.0) || !(dot(s.normal, s.normal) > 0.0) {
+        return 0u;
+    }
+    return pack2x16snorm(oct_encode(s.normal));
+}
+
 @compute @workgroup_size(8, 8)
 fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
@@ -165,6 +192,7 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = gid.y * frame.width + gid.x;
     let s0 = sample0(p);
     var out0 = vec3<f32>(0.0);
+    var hidden0 = vec3<f32>(0.0);
     if s0.depth > 0.0 {
         // The next bounce spreads what the gather found over the whole hemisphere: E / c, pi
         // times the weighted mean radiance of the surfaces it saw (directions it did not cover
@@ -172,7 +200,8 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        out0 = boost(s0.base_color) * (diffuse0[p].rgb + params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e) + s0.emissive;
+        hidden0 = boost(s0.base_color) * params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e;
+        out0 = boost(s0.base_color) * diffuse0[p].rgb + hidden0 + s0.emissive;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
@@ -181,7 +210,13 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     out0 = select(vec3<f32>(0.0), out0, finite3(out0));
     out1 = select(vec3<f32>(0.0), out1, finite3(out1));
-    source[p] = vec4<u32>(bitcast<u32>(s0.depth), bitcast<u32>(s1.depth), pack_rgb9e5(out0), pack_rgb9e5(out1));
+    hidden0 = select(vec3<f32>(0.0), hidden0, finite3(hidden0) && finite3(out0));
+    source[p] = SourceTexel(
+        vec2<u32>(bitcast<u32>(s0.depth), bitcast<u32>(s1.depth)),
+        vec2<u32>(pack_rgb9e5(out0), pack_rgb9e5(out1)),
+        vec2<u32>(pack_normal(s0), pack_normal(s1)),
+        vec2<u32>(pack_rgb9e5(hidden0), 0u),
+    );
 }
 
 // Level `level` of the gather source from the level below (the rotated grid of
@@ -199,6 +234,25 @@ fn source_offset(l: u32) -> u32 {
 }
 
 const PI_R: f32 = 3.14159265;
+
+// What the surface of `layer` in texel t (pixel centre `at`, view depth z) sends towards the
+// view-space point c: B where it faces c (or without the normal test), else H (its far side's).
+fn sent(t: SourceTexel, layer: u32, c: vec3<f32>, at: vec2<f32>, z: f32) -> vec3<f32> {
+    if params.normal_test == 0u {
+        return unpack_rgb9e5(t.radiance[layer]);
+    }
+    let normal = mat_mul(frame.view, vec4<f32>(oct_decode(unpack2x16snorm(t.normal[layer])), 0.0)).xyz;
+    // A surface in c's own plane (seen edge-on, or c's neighbour on a flat wall, where rounding
+    // picks the sign) counts as facing it.
+    let d = c - view_position(frame, at, z);
+    if dot(d, normal) > -FACING_SLACK * length(d) {
+        return unpack_rgb9e5(t.radiance[layer]);
+    }
+    return unpack_rgb9e5(t.hidden[layer]);
+}
+
+// How far (the cosine) a surface may turn away from a point and still count as facing it.
+const FACING_SLACK: f32 = 1e-3;
 
 // The `slices` gather at `pixel` (layer-0 sample s): irradiance and confidence.
 // `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
@@ -233,24 +287,24 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                 var q = 0u;
                 let at = mip_texel(tap, step_level, source_offset(step_level), &q);
                 let t = source[q];
-                let z0 = bitcast<f32>(t.x);
+                let z0 = bitcast<f32>(t.depth.x);
                 if !(z0 > 0.0) {
                     continue;
                 }
-                let z1 = bitcast<f32>(t.y);
+                let z1 = bitcast<f32>(t.depth.y);
                 let backs = solid_backs(z0, z1, params.thickness);
                 var front2 = 0.0;
                 var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);
                 var first = countOneBits(bits & ~occupied);
                 if first > 0u {
-                    sum += unpack_rgb9e5(t.z) * f32(first);
+                    sum += sent(t, 0u, c, at, z0) * f32(first);
                 }
                 occupied |= bits;
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, 0.0, params.radius, &front2);
                     first = countOneBits(bits & ~occupied);
                     if first > 0u {
-                        sum += unpack_rgb9e5(t.w) * f32(first);
+                        sum += sent(t, 1u, c, at, z1) * f32(first);
                     }
                     occupied |= bits;
                 }
@@ -285,10 +339,10 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
             var depth: f32;
             var normal: vec3<f32>;
             if layer == 0u {
-                depth = bitcast<f32>(t.x);
+                depth = bitcast<f32>(t.depth.x);
                 normal = gword_normal(gbuffer0[o * G_WORDS]);
             } else {
-                depth = bitcast<f32>(t.y);
+                depth = bitcast<f32>(t.depth.y);
                 normal = gword_normal(gbuffer1[o * G_WORDS]);
             }
             if !(depth > 0.0) {
@@ -303,7 +357,7 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
             let wn_x = dot(w, n);
             let wn_y = dot(w, normalize(mat_mul(frame.view, vec4<f32>(normal, 0.0)).xyz));
             if wn_x > 0.0 && (params.normal_test == 0u || wn_y < 0.0) {
-                let radiance = unpack_rgb9e5(select(t.w, t.z, layer == 0u));
+                let radiance = unpack_rgb9e5(t.radiance[layer]);
                 sum += radiance * wn_x;
                 weight += wn_x;
                 m += 1u;

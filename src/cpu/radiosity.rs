@@ -37,15 +37,26 @@ pub fn feedback_without_history(
         .collect()
 }
 
-/// The gather source of `radiosity_feedback` and `radiosity_source_level`: both layers' view
-/// depths and B (`b`) at every pixel, and the rotated-grid levels of `layout` above them.
+/// The gather source of `radiosity_feedback` and `radiosity_source_level` for a frame without
+/// history: both layers' view depths, normals and B (`b`) at every pixel (H, what a surface's
+/// far side sends, is the indirect light it reflects: none yet), and the rotated-grid levels of
+/// `layout` above them.
 pub fn source(
     layers: [&[GSample]; 2],
     b: [&[Vec3]; 2],
     layout: &PyramidLayout,
 ) -> Vec<SourceTexel> {
     let base: Vec<SourceTexel> = (0..layers[0].len())
-        .map(|p| SourceTexel::new([layers[0][p].depth, layers[1][p].depth], [b[0][p], b[1][p]]))
+        .map(|p| {
+            let [s0, s1] = [&layers[0][p], &layers[1][p]];
+            let normal = |s: &GSample| if s.depth > 0.0 { s.normal } else { Vec3::ZERO };
+            SourceTexel::new(
+                [s0.depth, s1.depth],
+                [normal(s0), normal(s1)],
+                [b[0][p], b[1][p]],
+                [Vec3::ZERO; 2],
+            )
+        })
         .collect();
     rotated_grid(&base, layout)
 }
@@ -129,6 +140,9 @@ pub fn gather(
     out
 }
 
+/// `FACING_SLACK` of `wgsl/radiosity.wgsl`.
+const FACING_SLACK: f32 = 1e-3;
+
 /// What the gather reads.
 struct Gather<'a> {
     f: &'a FrameUniform,
@@ -139,6 +153,18 @@ struct Gather<'a> {
 }
 
 impl Gather<'_> {
+    /// As `sent`: what the surface of `layer` in texel `t` (pixel centre `at`, view depth `z`)
+    /// sends towards the view-space point `c`, B where it faces `c` (or without the normal
+    /// test), else H.
+    fn sent(&self, t: &SourceTexel, layer: usize, c: Vec3, at: Vec2, z: f32) -> Vec3 {
+        if self.u.normal_test == 0 {
+            return t.radiance(layer);
+        }
+        let normal = mat_mul(&self.f.view, t.normal(layer).extend(0.0).to_array()).xyz();
+        let d = c - view_position(self.f, at, z);
+        if d.dot(normal) > -FACING_SLACK * d.length() { t.radiance(layer) } else { t.hidden(layer) }
+    }
+
     /// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
     fn slices(&self, (x, y): (u32, u32), noise_at: (u32, u32)) -> Vec4 {
         let (f, u) = (self.f, self.u);
@@ -174,12 +200,12 @@ impl Gather<'_> {
                     let z1 = t.depth(1);
                     let (back0, back1) = solid_backs(z0, z1, u.thickness);
                     let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
-                    sum += t.radiance(0) * (bits & !occupied).count_ones() as f32;
+                    sum += self.sent(t, 0, c, at, z0) * (bits & !occupied).count_ones() as f32;
                     occupied |= bits;
                     if z1 > z0 {
                         let (bits, _) =
                             sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
-                        sum += t.radiance(1) * (bits & !occupied).count_ones() as f32;
+                        sum += self.sent(t, 1, c, at, z1) * (bits & !occupied).count_ones() as f32;
                         occupied |= bits;
                     }
                 }

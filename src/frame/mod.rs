@@ -79,6 +79,7 @@ pub const MIRRORED: &[MirrorLayout] = &[
     GpuLight::LAYOUT,
     GpuMaterial::LAYOUT,
     GpuTextureSlot::LAYOUT,
+    SourceTexel::LAYOUT,
 ];
 
 mirrored!(

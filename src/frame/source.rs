@@ -1,9 +1,12 @@
-//! The radiosity's gather source: one 16-byte texel per pixel (and per texel of its MIP levels)
-//! holding what a gather tap reads, both layers' view depths and outgoing radiance B, the
-//! radiance in RGB9E5 (`wgsl/shared/rgb9e5.wgsl`).
+//! The radiosity's gather source: one 32-byte texel per pixel (and per texel of its MIP levels)
+//! holding what a gather tap reads: both layers' view depths, outgoing radiance B, normals and
+//! the radiance H of each surface's far side, the radiances in RGB9E5
+//! (`wgsl/shared/rgb9e5.wgsl`), the normals octahedral in 2x16 snorm.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+
+use crate::gbuffer::{oct_decode, unpack2x16snorm};
 
 /// Largest value RGB9E5 holds: (511 / 512) 2^16.
 pub const RGB9E5_MAX: f32 = 65408.0;
@@ -33,6 +36,28 @@ pub fn unpack_rgb9e5(w: u32) -> Vec3 {
     Vec3::new((w & 0x1ff) as f32, ((w >> 9) & 0x1ff) as f32, ((w >> 18) & 0x1ff) as f32) * scale
 }
 
+/// The octahedral encoding of `wgsl/shared/gbuffer.wgsl` (`oct_encode`) of a non-zero `n`.
+pub fn oct_encode(n: Vec3) -> Vec2 {
+    let p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
+    if n.z >= 0.0 {
+        return p;
+    }
+    let sign = Vec2::new(if p.x >= 0.0 { 1.0 } else { -1.0 }, if p.y >= 0.0 { 1.0 } else { -1.0 });
+    (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs())) * sign
+}
+
+/// WGSL's `pack2x16snorm`.
+fn pack2x16snorm(v: Vec2) -> u32 {
+    let c = |x: f32| u32::from((x.clamp(-1.0, 1.0) * 32767.0).round_ties_even() as i16 as u16);
+    c(v.x) | (c(v.y) << 16)
+}
+
+/// A world-space normal as the gather source holds it (`pack_normal`; 0, which reads as +z,
+/// for the zero vector: a texel's depth says whether it holds a surface).
+pub fn pack_normal(n: Vec3) -> u32 {
+    if n.length_squared() > 0.0 { pack2x16snorm(oct_encode(n)) } else { 0 }
+}
+
 /// One texel of the gather source, as `radiosity_feedback` writes it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
@@ -41,12 +66,40 @@ pub struct SourceTexel {
     pub depth: [u32; 2],
     /// B of layer 0 and layer 1 in RGB9E5.
     pub radiance: [u32; 2],
+    /// World-space normal of layer 0 and layer 1 ([`pack_normal`]; 0 where there is no surface).
+    pub normal: [u32; 2],
+    /// H of layer 0 and layer 1 in RGB9E5: what the surface's far side sends, the part of B
+    /// that does not depend on which way the surface faces (the indirect light it reflects).
+    pub hidden: [u32; 2],
 }
 
+crate::frame::mirrored!(
+    SourceTexel,
+    "radiosity.wgsl",
+    "SourceTexel",
+    [depth, radiance, normal, hidden]
+);
+
 impl SourceTexel {
-    /// The texel of a pixel whose layers lie at view depths `depth` and send `radiance`.
-    pub fn new(depth: [f32; 2], radiance: [Vec3; 2]) -> Self {
-        SourceTexel { depth: depth.map(f32::to_bits), radiance: radiance.map(pack_rgb9e5) }
+    /// The texel of a pixel whose layers lie at view depths `depth`, face along the world-space
+    /// `normal`s and send `radiance` (their far sides `hidden`).
+    pub fn new(depth: [f32; 2], normal: [Vec3; 2], radiance: [Vec3; 2], hidden: [Vec3; 2]) -> Self {
+        SourceTexel {
+            depth: depth.map(f32::to_bits),
+            radiance: radiance.map(pack_rgb9e5),
+            normal: normal.map(pack_normal),
+            hidden: hidden.map(pack_rgb9e5),
+        }
+    }
+
+    /// The world-space normal of `layer` (meaningless where its depth is 0).
+    pub fn normal(&self, layer: usize) -> Vec3 {
+        oct_decode(unpack2x16snorm(self.normal[layer]))
+    }
+
+    /// H of `layer`.
+    pub fn hidden(&self, layer: usize) -> Vec3 {
+        unpack_rgb9e5(self.hidden[layer])
     }
 
     /// View depth of `layer`.

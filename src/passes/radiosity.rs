@@ -4,7 +4,7 @@ use super::blur::Blur;
 use super::pyramid::Pyramid;
 use super::upsample::Upsample;
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::{RadiosityUniform, mip_size};
+use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
 use crate::settings::{RadiosityEstimator, Settings, downsample_level};
@@ -14,8 +14,9 @@ use crate::settings::{RadiosityEstimator, Settings, downsample_level};
 /// source, then `vec4<f32>` per pixel.
 #[derive(Clone, Copy, Debug)]
 pub struct RadiosityBuffers<'a> {
-    /// The gather source: a [`SourceTexel`](crate::frame::SourceTexel) per pixel (view depths
-    /// and outgoing radiance B of both layers: direct + emission + damped indirect light), then
+    /// The gather source: a [`SourceTexel`](crate::frame::SourceTexel) per pixel (view depths,
+    /// normals and outgoing radiance B of both layers: direct + emission + damped indirect
+    /// light, and H, what each surface's far side sends), then
     /// its MIP levels (as [`PyramidLayout`](crate::frame::PyramidLayout) places them).
     pub source: &'a wgpu::Buffer,
     /// The gather at 1 / [`RadiositySettings::downsample`](crate::RadiositySettings) of the
@@ -74,7 +75,10 @@ impl RadiosityStage {
             level,
             low,
             uniform: gpu::uniform_buffer_for::<RadiosityUniform>(device, "deep-gbuffer.radiosity"),
-            source: storage("deep-gbuffer.radiosity.source", texels * 16),
+            source: storage(
+                "deep-gbuffer.radiosity.source",
+                texels * std::mem::size_of::<SourceTexel>() as u64,
+            ),
             levels,
             gathered: buffer("deep-gbuffer.radiosity.raw"),
             history: [
