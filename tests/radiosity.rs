@@ -146,7 +146,11 @@ fn first_frame_matches(
             let depth = layer[p].depth;
             assert_eq!(t.depth(l).to_bits(), depth.to_bits(), "{what}: depth of layer {l}");
             // The normal in 2x16 snorm (a few 1e-5 off); no far-side light without history.
-            let normal = layer[p].normal;
+            let normal = deep_gbuffer::cpu::frame::mat_mul(
+                &frame.view,
+                layer[p].normal.extend(0.0).to_array(),
+            )
+            .truncate();
             assert!(
                 depth.is_nan()
                     || depth <= 0.0

@@ -9,7 +9,7 @@
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
 //   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
 //   It writes level 0 of the gather source, 32 bytes a pixel and the only thing the taps
-//   read: both layers' view depths, B in RGB9E5, normals (octahedral, 2x16 snorm) and H, the
+//   read: both layers' view depths, B in RGB9E5, view-space normals (octahedral, 2x16 snorm) and H, the
 //   radiance of the surface's far side (below).
 // radiosity_source_level: the levels above, a rotated-grid MIP chain as the obscurance's depth
 //   pyramid (each texel one real pixel's depths and B). A tap h pixels away reads level
@@ -119,7 +119,7 @@ struct SourceTexel {
     depth: vec2<u32>,
     // B of each layer in RGB9E5.
     radiance: vec2<u32>,
-    // World-space normal of each layer, octahedral in 2x16 snorm (0 where there is no surface).
+    // View-space normal of each layer, octahedral in 2x16 snorm (0 where there is no surface).
     normal: vec2<u32>,
     // H of each layer in RGB9E5: what the surface's far side sends.
     hidden: vec2<u32>,
@@ -176,12 +176,13 @@ fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<
     return h;
 }
 
-// A sample's normal as the gather source holds it (0 where there is no surface).
+// A sample's normal as the gather source holds it, in view space (0 where there is no surface).
 fn pack_normal(s: GSample) -> u32 {
-    if !(s.depth > 0.0) || !(dot(s.normal, s.normal) > 0.0) {
+    let n = mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz;
+    if !(s.depth > 0.0) || !(dot(n, n) > 0.0) {
         return 0u;
     }
-    return pack2x16snorm(oct_encode(s.normal));
+    return pack2x16snorm(oct_encode(n));
 }
 
 @compute @workgroup_size(8, 8)
@@ -241,7 +242,7 @@ fn sent(t: SourceTexel, layer: u32, c: vec3<f32>, at: vec2<f32>, z: f32) -> vec3
     if params.normal_test == 0u {
         return unpack_rgb9e5(t.radiance[layer]);
     }
-    let normal = mat_mul(frame.view, vec4<f32>(oct_decode(unpack2x16snorm(t.normal[layer])), 0.0)).xyz;
+    let normal = oct_decode(unpack2x16snorm(t.normal[layer]));
     // A surface in c's own plane (seen edge-on, or c's neighbour on a flat wall, where rounding
     // picks the sign) counts as facing it.
     let d = c - view_position(frame, at, z);

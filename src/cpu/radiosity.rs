@@ -38,10 +38,11 @@ pub fn feedback_without_history(
 }
 
 /// The gather source of `radiosity_feedback` and `radiosity_source_level` for a frame without
-/// history: both layers' view depths, normals and B (`b`) at every pixel (H, what a surface's
+/// history: both layers' view depths, view-space normals (of `f`'s view) and B (`b`) at every pixel (H, what a surface's
 /// far side sends, is the indirect light it reflects: none yet), and the rotated-grid levels of
 /// `layout` above them.
 pub fn source(
+    f: &FrameUniform,
     layers: [&[GSample]; 2],
     b: [&[Vec3]; 2],
     layout: &PyramidLayout,
@@ -49,7 +50,10 @@ pub fn source(
     let base: Vec<SourceTexel> = (0..layers[0].len())
         .map(|p| {
             let [s0, s1] = [&layers[0][p], &layers[1][p]];
-            let normal = |s: &GSample| if s.depth > 0.0 { s.normal } else { Vec3::ZERO };
+            let normal = |s: &GSample| {
+                let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz();
+                if s.depth > 0.0 { n } else { Vec3::ZERO }
+            };
             SourceTexel::new(
                 [s0.depth, s1.depth],
                 [normal(s0), normal(s1)],
@@ -160,7 +164,7 @@ impl Gather<'_> {
         if self.u.normal_test == 0 {
             return t.radiance(layer);
         }
-        let normal = mat_mul(&self.f.view, t.normal(layer).extend(0.0).to_array()).xyz();
+        let normal = t.normal(layer);
         let d = c - view_position(self.f, at, z);
         if d.dot(normal) > -FACING_SLACK * d.length() { t.radiance(layer) } else { t.hidden(layer) }
     }

@@ -1,6 +1,6 @@
 //! The radiosity's gather source: one 32-byte texel per pixel (and per texel of its MIP levels)
-//! holding what a gather tap reads: both layers' view depths, outgoing radiance B, normals and
-//! the radiance H of each surface's far side, the radiances in RGB9E5
+//! holding what a gather tap reads: both layers' view depths, outgoing radiance B, view-space
+//! normals and the radiance H of each surface's far side, the radiances in RGB9E5
 //! (`wgsl/shared/rgb9e5.wgsl`), the normals octahedral in 2x16 snorm.
 
 use bytemuck::{Pod, Zeroable};
@@ -52,7 +52,7 @@ fn pack2x16snorm(v: Vec2) -> u32 {
     c(v.x) | (c(v.y) << 16)
 }
 
-/// A world-space normal as the gather source holds it (`pack_normal`; 0, which reads as +z,
+/// A normal as the gather source holds it (`pack_normal`; 0, which reads as +z,
 /// for the zero vector: a texel's depth says whether it holds a surface).
 pub fn pack_normal(n: Vec3) -> u32 {
     if n.length_squared() > 0.0 { pack2x16snorm(oct_encode(n)) } else { 0 }
@@ -66,7 +66,7 @@ pub struct SourceTexel {
     pub depth: [u32; 2],
     /// B of layer 0 and layer 1 in RGB9E5.
     pub radiance: [u32; 2],
-    /// World-space normal of layer 0 and layer 1 ([`pack_normal`]; 0 where there is no surface).
+    /// View-space normal of layer 0 and layer 1 ([`pack_normal`]; 0 where there is no surface).
     pub normal: [u32; 2],
     /// H of layer 0 and layer 1 in RGB9E5: what the surface's far side sends, the part of B
     /// that does not depend on which way the surface faces (the indirect light it reflects).
@@ -81,7 +81,7 @@ crate::frame::mirrored!(
 );
 
 impl SourceTexel {
-    /// The texel of a pixel whose layers lie at view depths `depth`, face along the world-space
+    /// The texel of a pixel whose layers lie at view depths `depth`, face along the view-space
     /// `normal`s and send `radiance` (their far sides `hidden`).
     pub fn new(depth: [f32; 2], normal: [Vec3; 2], radiance: [Vec3; 2], hidden: [Vec3; 2]) -> Self {
         SourceTexel {
@@ -92,7 +92,7 @@ impl SourceTexel {
         }
     }
 
-    /// The world-space normal of `layer` (meaningless where its depth is 0).
+    /// The view-space normal of `layer` (meaningless where its depth is 0).
     pub fn normal(&self, layer: usize) -> Vec3 {
         oct_decode(unpack2x16snorm(self.normal[layer]))
     }
