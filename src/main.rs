@@ -311,8 +311,8 @@ struct RadiosityArgs {
     #[arg(long)]
     damping: Option<f32>,
     /// Take a surface's outgoing light only where it faces the gathering point; a slices
-    /// gather takes the indirect light a surface reflects from its far side (see
-    /// `RadiositySettings::normal_test`) [default: on].
+    /// gather takes what a surface facing away sends from its far side, its emission and the
+    /// indirect light it reflects (see `RadiositySettings::normal_test`) [default: on].
     #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
     radiosity_normal_test: Option<bool>,
 }

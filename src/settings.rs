@@ -342,9 +342,9 @@ pub struct RadiositySettings {
     pub history_tolerance: f32,
     /// Take a surface's outgoing light only where it faces the gathering point (w.n_Y < 0).
     /// `spiral`: other taps do not count. `slices`: a surface facing away still hides what lies
-    /// behind it, and sends what its far side sends instead of what the camera sees of it: the
-    /// indirect light it reflects (none on the first frame, and none from layer 1), not its
-    /// direct light (a sphere lit from above, seen from the ground beside it, shows the ground
+    /// behind it, and sends what its far side sends instead of what the camera sees of it: its
+    /// emission and the indirect light it reflects (none on the first frame, and none from
+    /// layer 1), not its direct light (a sphere lit from above, seen from the ground beside it, shows the ground
     /// its dark side). Off, every surface sends its visible side's light both ways.
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).

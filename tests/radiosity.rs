@@ -6,7 +6,7 @@ mod common;
 
 use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render_frames, shade_fixture};
 use deep_gbuffer::cpu::radiosity as cpu;
-use deep_gbuffer::frame::{PyramidLayout, RadiosityUniform, SourceTexel};
+use deep_gbuffer::frame::{PyramidLayout, RadiosityUniform, SourceTexel, pack_rgb9e5};
 use deep_gbuffer::settings::downsample_level;
 use deep_gbuffer::{
     Boost, Normalization, RadiosityEstimator, RadiositySettings, Renderer, Scene, SceneBuffers,
@@ -145,7 +145,8 @@ fn first_frame_matches(
         for (l, layer) in layers.iter().enumerate() {
             let depth = layer[p].depth;
             assert_eq!(t.depth(l).to_bits(), depth.to_bits(), "{what}: depth of layer {l}");
-            // The normal in 2x16 snorm (a few 1e-5 off); no far-side light without history.
+            // The normal in 2x16 snorm (a few 1e-5 off); the far side's light without history is
+            // the emission.
             let normal = deep_gbuffer::cpu::frame::mat_mul(
                 &frame.view,
                 layer[p].normal.extend(0.0).to_array(),
@@ -158,7 +159,8 @@ fn first_frame_matches(
                 "{what}: normal of layer {l}: {} vs {normal}",
                 t.normal(l)
             );
-            assert_eq!(t.hidden(l), glam::Vec3::ZERO, "{what}: far side of layer {l}");
+            let emission = if depth > 0.0 { layer[p].emissive } else { glam::Vec3::ZERO };
+            assert_eq!(t.hidden[l], pack_rgb9e5(emission), "{what}: far side of layer {l}");
         }
     }
     // The levels above pick texels of the GPU's own level 0, exactly.

@@ -20,8 +20,9 @@
 // its solid, not the side the camera sees, and the light the camera's side sends (its direct
 // light above all: a sphere lit from above seen from the ground beside it) does not reach X.
 // Such a surface still hides its sectors but sends H, the part of B that does not depend on
-// which way the surface faces: the indirect light it reflects, boost delta (1 - metallic) rho /
-// pi E_prev on layer 0 (0 on layer 1, which has no irradiance of its own, and on the first frame).
+// which way the surface faces: its emission (the ground truth's surfaces emit on both sides)
+// and the indirect light it reflects, boost delta (1 - metallic) rho / pi E_prev on layer 0
+// (none on layer 1, which has no irradiance of its own, nor on the first frame).
 // radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
 //   world-space radius, Y from layer 0, or from layer 1 where the layer-0 point fails; a tap
 //   counts only with w.n_X > 0 and, unless the test is off, w.n_Y < 0 (Y faces X). With M the
@@ -201,22 +202,25 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        hidden0 = boost(s0.base_color) * params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e;
-        out0 = boost(s0.base_color) * diffuse0[p].rgb + hidden0 + s0.emissive;
+        hidden0 = boost(s0.base_color) * params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e + s0.emissive;
+        out0 = boost(s0.base_color) * diffuse0[p].rgb + hidden0;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
+    var hidden1 = vec3<f32>(0.0);
     if s1.depth > 0.0 {
+        hidden1 = s1.emissive;
         out1 = boost(s1.base_color) * diffuse1[p].rgb + s1.emissive;
     }
     out0 = select(vec3<f32>(0.0), out0, finite3(out0));
     out1 = select(vec3<f32>(0.0), out1, finite3(out1));
     hidden0 = select(vec3<f32>(0.0), hidden0, finite3(hidden0) && finite3(out0));
+    hidden1 = select(vec3<f32>(0.0), hidden1, finite3(hidden1) && finite3(out1));
     source[p] = SourceTexel(
         vec2<u32>(bitcast<u32>(s0.depth), bitcast<u32>(s1.depth)),
         vec2<u32>(pack_rgb9e5(out0), pack_rgb9e5(out1)),
         vec2<u32>(pack_normal(s0), pack_normal(s1)),
-        vec2<u32>(pack_rgb9e5(hidden0), 0u),
+        vec2<u32>(pack_rgb9e5(hidden0), pack_rgb9e5(hidden1)),
     );
 }
 
@@ -264,8 +268,6 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
     let r_px = params.radius * pixels_per_unit(frame, s.depth);
     let slices = max(params.slices, 1u);
     let steps = max(params.samples / (2u * slices), 1u);
-    let spacing = r_px / f32(steps);
-    let coarsest = mip_coarsest(spacing, params.levels);
     let noise = slice_noise(noise_at, params.turn);
     var seen = vec3<f32>(0.0);
     var covered = 0.0;
@@ -276,11 +278,16 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
         }
         var occupied = 0u;
         var sum = vec3<f32>(0.0);
-        for (var j = 0u; j < steps; j++) {
-            let h = spacing * (f32(j) + noise.y);
-            let step_level = mip_level(h, params.mip_offset, coarsest);
-            for (var side = 0u; side < 2u; side++) {
-                let along = select(1.0, -1.0, side == 1u);
+        // The two sides hold opposite halves of the arc: their order does not matter.
+        for (var side = 0u; side < 2u; side++) {
+            let along = select(1.0, -1.0, side == 1u);
+            // The steps spread over the radius or, where the slice's line leaves the screen
+            // first, over what the screen holds of it.
+            let spacing = min(r_px, slice_reach(pixel, sl, along)) / f32(steps);
+            let coarsest = mip_coarsest(spacing, params.levels);
+            for (var j = 0u; j < steps; j++) {
+                let h = spacing * (f32(j) + noise.y);
+                let step_level = mip_level(h, params.mip_offset, coarsest);
                 var tap: vec2<i32>;
                 if !slice_tap(pixel, sl, h, along, &tap) {
                     continue;

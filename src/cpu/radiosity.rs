@@ -38,9 +38,9 @@ pub fn feedback_without_history(
 }
 
 /// The gather source of `radiosity_feedback` and `radiosity_source_level` for a frame without
-/// history: both layers' view depths, view-space normals (of `f`'s view) and B (`b`) at every pixel (H, what a surface's
-/// far side sends, is the indirect light it reflects: none yet), and the rotated-grid levels of
-/// `layout` above them.
+/// history: both layers' view depths, view-space normals (of `f`'s view) and B (`b`) at every
+/// pixel (H, what a surface's far side sends, is its emission and the indirect light it
+/// reflects: none yet), and the rotated-grid levels of `layout` above them.
 pub fn source(
     f: &FrameUniform,
     layers: [&[GSample]; 2],
@@ -58,7 +58,7 @@ pub fn source(
                 [s0.depth, s1.depth],
                 [normal(s0), normal(s1)],
                 [b[0][p], b[1][p]],
-                [Vec3::ZERO; 2],
+                [s0, s1].map(|s| if s.depth > 0.0 { s.emissive } else { Vec3::ZERO }),
             )
         })
         .collect();
@@ -178,8 +178,6 @@ impl Gather<'_> {
         let r_px = u.radius * pixels_per_unit(f, s.depth);
         let slices = u.slices.max(1);
         let steps = (u.samples / (2 * slices)).max(1);
-        let spacing = r_px / steps as f32;
-        let coarsest = mip_coarsest(spacing, self.layout);
         let noise = slice_noise(noise_at.0, noise_at.1, u.turn);
         let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
         for k in 0..slices {
@@ -188,10 +186,12 @@ impl Gather<'_> {
                 continue;
             }
             let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
-            for j in 0..steps {
-                let h = spacing * (j as f32 + noise.1);
-                let level = mip_level(h, u.mip_offset, coarsest);
-                for side in [1.0, -1.0] {
+            for side in [1.0, -1.0] {
+                let spacing = r_px.min(sl.reach(f, (x, y), side)) / steps as f32;
+                let coarsest = mip_coarsest(spacing, self.layout);
+                for j in 0..steps {
+                    let h = spacing * (j as f32 + noise.1);
+                    let level = mip_level(h, u.mip_offset, coarsest);
                     let Some(tap) = sl.tap(f, (x, y), h, side) else {
                         continue;
                     };

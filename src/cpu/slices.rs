@@ -102,6 +102,17 @@ impl Slice {
         Slice { dir, v, gamma, total, weight, offset: noise.2 }
     }
 
+    /// As `slice_reach`: how far (pixels) the slice's line runs from the centre of pixel
+    /// `(x, y)` on `side` (+-1) before it leaves the screen.
+    pub fn reach(&self, f: &FrameUniform, (x, y): (u32, u32), side: f32) -> f32 {
+        let d = self.dir * side;
+        let p = Vec2::new(x as f32, y as f32) + 0.5;
+        let exit = |d: f32, p: f32, size: u32| {
+            if d == 0.0 { 3.4e38 } else { ((if d > 0.0 { size as f32 } else { 0.0 }) - p) / d }
+        };
+        exit(d.x, p.x, f.width).min(exit(d.y, p.y, f.height))
+    }
+
     /// As `slice_tap`: the pixel of the step at `h` pixels on `side` (+-1) of the slice through
     /// pixel `(x, y)`, if it lies on screen and is not that pixel.
     pub fn tap(

@@ -69,7 +69,8 @@ pub struct SourceTexel {
     /// View-space normal of layer 0 and layer 1 ([`pack_normal`]; 0 where there is no surface).
     pub normal: [u32; 2],
     /// H of layer 0 and layer 1 in RGB9E5: what the surface's far side sends, the part of B
-    /// that does not depend on which way the surface faces (the indirect light it reflects).
+    /// that does not depend on which way the surface faces (its emission and the indirect light
+    /// it reflects).
     pub hidden: [u32; 2],
 }
 

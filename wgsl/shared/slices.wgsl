@@ -56,6 +56,16 @@ fn slice_tap(pixel: vec2<u32>, sl: Slice, h: f32, side: f32, tap: ptr<function, 
     return all(t >= vec2<i32>(0)) && t.x < i32(frame.width) && t.y < i32(frame.height) && any(vec2<u32>(t) != pixel);
 }
 
+// How far (pixels) the slice's line runs from the centre of `pixel` on `side` (+-1) before it
+// leaves the screen.
+fn slice_reach(pixel: vec2<u32>, sl: Slice, side: f32) -> f32 {
+    let d = sl.dir * side;
+    let p = vec2<f32>(pixel) + 0.5;
+    let size = vec2<f32>(f32(frame.width), f32(frame.height));
+    let t = (select(vec2<f32>(0.0), size, d > vec2<f32>(0.0)) - p) / d;
+    return min(select(3.4e38, t.x, d.x != 0.0), select(3.4e38, t.y, d.y != 0.0));
+}
+
 // Antiderivative of cos(t - gamma) sin(t).
 fn arc_f(t: f32, gamma: f32) -> f32 {
     return -0.25 * cos(2.0 * t - gamma) + 0.5 * t * sin(gamma);
