@@ -18,7 +18,7 @@ mod uniforms;
 
 pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
 pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
-pub use source::{RGB9E5_MAX, SourceTexel, pack_rgb9e5, unpack_rgb9e5};
+pub use source::{RGB9E5_MAX, SourceTexel, pack_normal, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
     AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform, MOTION_TILE,
     MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform, TransparencyUniform,

@@ -37,7 +37,7 @@ pub fn unpack_rgb9e5(w: u32) -> Vec3 {
 }
 
 /// The octahedral encoding of `wgsl/shared/gbuffer.wgsl` (`oct_encode`) of a non-zero `n`.
-pub fn oct_encode(n: Vec3) -> Vec2 {
+fn oct_encode(n: Vec3) -> Vec2 {
     let p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
     if n.z >= 0.0 {
         return p;
