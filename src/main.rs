@@ -289,7 +289,7 @@ struct RadiosityArgs {
     /// Radiosity gather (see `wgsl/radiosity.wgsl`) [default: slices].
     #[arg(long, value_enum)]
     radiosity_estimator: Option<RadiosityEstimator>,
-    /// Radiosity gather radius in scene units [default: 2 times the scene's scale].
+    /// Radiosity gather radius in scene units [default: 3 times the scene's scale].
     #[arg(long)]
     radiosity_radius: Option<f32>,
     /// Radiosity taps per pixel [default: 32, or the preset's].

@@ -328,7 +328,10 @@ pub struct RadiositySettings {
     /// How far a surface reaches behind itself, as a fraction of `radius` (`slices`; as
     /// [`AoSettings::thickness`]).
     pub thickness: f32,
-    /// World-space gather radius, in scene units.
+    /// World-space gather radius, in scene units. The `slices` steps spread over the radius or
+    /// the part of it on screen, so a radius past the screen's edge costs nothing more; 3 (1.5
+    /// times the reference extent, [`Settings::REFERENCE_EXTENT`]) lets the floor of a room
+    /// that size gather from its ceiling.
     pub radius: f32,
     /// Taps per pixel.
     pub samples: u32,
@@ -440,7 +443,7 @@ impl Default for RadiositySettings {
             estimator: RadiosityEstimator::default(),
             slices: 2,
             thickness: 0.75,
-            radius: 2.0,
+            radius: 3.0,
             samples: 32,
             damping: 0.8,
             alpha: 0.85,
