@@ -86,6 +86,7 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
         reflective: false,
         emissive: false,
         blended: false,
+        masked: false,
         bounds: Some((Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
     };
     let scene = SceneBuffers::import(&device, buffers, info).unwrap();
@@ -292,6 +293,7 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             reflective: false,
             emissive: false,
             blended: false,
+            masked: false,
             bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
         };
         SceneBuffers::import(&device, buffers, info).unwrap()

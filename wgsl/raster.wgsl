@@ -320,11 +320,15 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
 #endif
 }
 
+// Whether the scene has masked materials (SceneInfo::masked): without, the alpha test is
+// compiled out (on llvmpipe code that no fragment runs still costs: 4-8x the raster's time).
+override ALPHA_TEST: bool = true;
+
 fn fragment(pixel: vec2<i32>, d: f32, t: u32, tested: bool) {
     if !(d > 0.0 && d <= frame.far) {
         return;
     }
-    if tested && triangle_opacity(t, vec2<f32>(pixel) + 0.5, d) < materials[tri_materials[t]].alpha_cutoff {
+    if ALPHA_TEST && tested && triangle_opacity(t, vec2<f32>(pixel) + 0.5, d) < materials[tri_materials[t]].alpha_cutoff {
         return;
     }
     let p = u32(pixel.y) * frame.width + u32(pixel.x);

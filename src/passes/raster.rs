@@ -228,6 +228,9 @@ impl Rasterizer {
         ];
         entries.extend(optional.into_iter().filter_map(|(s, b)| Some((s, b?))));
         let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
+        // The alpha test only where the scene has masked materials (wgsl/raster.wgsl).
+        let [small, slices] = self.work.constants();
+        let constants = [small, slices, ("ALPHA_TEST", f64::from(u8::from(scene.info().masked)))];
         let mut defines = Vec::new();
         for &depth_phase in phases {
             defines = mode.defines();
@@ -239,15 +242,13 @@ impl Rasterizer {
             } else if depth_phase {
                 defines.push("DEPTH_PHASE");
             }
-            let get =
-                |entry| pipelines.get(device, "raster", entry, &defines, &self.work.constants());
+            let get = |entry| pipelines.get(device, "raster", entry, &defines, &constants);
             get("raster_small").dispatch(device, pass, &entries, groups);
             get("bin_args").dispatch(device, pass, &entries, (1, 1));
             get("raster_large").dispatch_indirect(device, pass, &entries, &self.args, 0);
         }
         if mode == RasterMode::Peel && t.peel_args.is_some() {
-            let p =
-                pipelines.get(device, "raster", "peel_dispatch", &defines, &self.work.constants());
+            let p = pipelines.get(device, "raster", "peel_dispatch", &defines, &constants);
             p.dispatch(device, pass, &entries, (1, 1));
         }
     }

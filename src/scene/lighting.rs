@@ -25,6 +25,12 @@ pub struct SceneInfo {
     /// Blended triangles are left out of the opaque layers, so without this set (and the
     /// transparency passes it calls for) they are not drawn at all.
     pub blended: bool,
+    /// Some material is masked ([`AlphaMode::Mask`](super::AlphaMode::Mask); for imported
+    /// buffers: some material's flags hold [`MATERIAL_MASK`](super::upload::MATERIAL_MASK)).
+    /// Without it the rasterizer is built without the per-fragment alpha test (code that no
+    /// fragment runs still costs on some devices), and a masked material with a texture is
+    /// drawn whole.
+    pub masked: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -41,6 +47,10 @@ impl SceneInfo {
             }),
             emissive: scene.materials.iter().any(|m| m.emissive.max_element() > 0.0),
             blended: scene.materials.iter().any(|m| m.alpha_mode == super::AlphaMode::Blend),
+            masked: scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.alpha_mode, super::AlphaMode::Mask { .. })),
             bounds: scene.bounds(),
         }
     }
