@@ -9,16 +9,17 @@
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
 //   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
 //   It writes level 0 of the gather source, 32 bytes a pixel and the only thing the taps
-//   read: both layers' view depths, B in RGB9E5, view-space normals (octahedral, 2x16 snorm) and H, the
-//   radiance of the surface's far side (below).
+//   read: both layers' view depths, B in RGB9E5, view-space normals (octahedral, 2x16 snorm)
+//   and H, the radiance of the surface's far side (below).
 // radiosity_source_level: the levels above, a rotated-grid MIP chain as the obscurance's depth
 //   pyramid (each texel one real pixel's depths and B). A tap h pixels away reads level
 //   floor(log2 h) - mip_offset (the slices never coarser than their step spacing) and its point
 //   is reconstructed at the pixel that texel came from: far taps read a small, cache-friendly
-//   level, and the work per tap is one 16-byte load.
-// With the normal test (the default), a surface a step finds may face away from X (n_Y . (X - Y) <= 0): X then sees the far side of
-// its solid, not the side the camera sees, and the light the camera's side sends (its direct
-// light above all: a sphere lit from above seen from the ground beside it) does not reach X.
+//   level, and the work per tap is one 32-byte load.
+// With the normal test (the default), a surface a step finds may face away from X
+// (n_Y . (X - Y) < 0, beyond a small slack): X then sees the far side of its solid, not the
+// side the camera sees, and the light the camera's side sends (its direct light above all: a
+// sphere lit from above seen from the ground beside it) does not reach X.
 // Such a surface still hides its sectors but sends H, the part of B that does not depend on
 // which way the surface faces: its emission (the ground truth's surfaces emit on both sides)
 // and the indirect light it reflects, boost delta (1 - metallic) rho / pi E_prev on layer 0
@@ -33,7 +34,8 @@
 //   conf = M / N; it writes conf E (the light of the share of the hemisphere its taps stand for)
 //   and conf.
 //   With SLICES (the default `slices` estimator) the gather runs over the slices of
-//   shared/slices.wgsl instead: steps out to the world-space radius read both layers' points at
+//   shared/slices.wgsl instead: steps out to the world-space radius (or, where the slice's line
+//   leaves the screen first, to the screen's edge) read both layers' points at
 //   full resolution, each point's solid (`thickness` deep, layer 0's no deeper than layer 1's
 //   surface) hides an arc of sectors, and the sectors a point hides first take its B: each
 //   surface's light arrives at the cosine-weighted solid angle it subtends from X, none
@@ -113,7 +115,7 @@ fn boost(rho: vec3<f32>) -> f32 {
 // light a surface sends every way alike, whatever the camera's view of it.
 @group(0) @binding(4) var<storage, read> diffuse0: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> diffuse1: array<vec4<f32>>;
-// The gather source, one texel per pixel at level 0 and a rotated-grid MIP chain above it:
+// The gather source, one texel per pixel at level 0 and a rotated-grid MIP chain above it.
 // Mirrors `SourceTexel` in src/frame/source.rs.
 struct SourceTexel {
     // View depths of layer 0 and 1 as f32 bits (0: no surface).
