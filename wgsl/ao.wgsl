@@ -19,7 +19,8 @@
 //     AV = 1 - intensity (1/pi) integral over the hemisphere of f(d(w)) cos(theta) dw,
 //     f(d) = max(1 - d^2/r^2, 0), d(w): distance to the first surface in direction w,
 // as the ground truth defines it, over the slices of shared/slices.wgsl: steps spaced evenly
-// out to the projected radius read the pyramid as `sao` does (level floor(log2 h) - mip_offset
+// out to the projected radius (or to the screen's edge where the slice's line leaves the screen
+// first) read the pyramid as `sao` does (level floor(log2 h) - mip_offset
 // for a step h pixels away), but never a level coarser than the step spacing; each
 // layer's point there hides the arc of its solid (`thickness` deep, no deeper than layer 1's
 // surface, for `bitmask`; without end, a height field, for `horizon`: thickness 0), and the
@@ -144,8 +145,6 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
 fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     let slices = max(ao.slices, 1u);
     let steps = max(ao.samples / (2u * slices), 1u);
-    let spacing = r_px / f32(steps);
-    let level = mip_coarsest(spacing, ao.levels);
     let noise = slice_noise(noise_at, 0u);
     let r2 = ao.radius * ao.radius;
     var total = 0.0;
@@ -156,13 +155,17 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
         }
         var occupied = 0u;
         var hidden = 0.0;
-        for (var j = 0u; j < steps; j++) {
-            let h = spacing * (f32(j) + noise.y);
-            // Finer levels for the near steps, as `sao` reads them, never coarser than the step
-            // spacing.
-            let step_level = tap_level(h, level);
-            for (var side = 0u; side < 2u; side++) {
-                let along = select(1.0, -1.0, side == 1u);
+        // The two sides hold opposite halves of the arc; each spreads its steps over the radius
+        // or, where the slice's line leaves the screen first, over the part on screen.
+        for (var side = 0u; side < 2u; side++) {
+            let along = select(1.0, -1.0, side == 1u);
+            let spacing = min(r_px, slice_reach(pixel, sl, along)) / f32(steps);
+            let level = mip_coarsest(spacing, ao.levels);
+            for (var j = 0u; j < steps; j++) {
+                let h = spacing * (f32(j) + noise.y);
+                // Finer levels for the near steps, as `sao` reads them, never coarser than the
+                // step spacing.
+                let step_level = tap_level(h, level);
                 var tap: vec2<i32>;
                 if !slice_tap(pixel, sl, h, along, &tap) {
                     continue;

@@ -115,8 +115,6 @@ impl Kernel<'_> {
         let (f, s) = (self.f, self.s);
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
-        let spacing = r_px / steps as f32;
-        let level = mip_coarsest(spacing, self.layout);
         let noise = slice_noise(noise_at.0, noise_at.1, 0);
         let thickness = s.solid_depth();
         let r2 = s.radius * s.radius;
@@ -129,12 +127,16 @@ impl Kernel<'_> {
             }
             let mut occupied = 0u32;
             let mut hidden = 0.0;
-            for j in 0..steps {
-                let h = spacing * (j as f32 + noise.1);
-                // Finer levels for the near steps, as `sao` reads them, never coarser than the
-                // step spacing.
-                let step_level = self.tap_level(h, level);
-                for side in [1.0, -1.0] {
+            // The two sides hold opposite halves of the arc; each spreads its steps over the
+            // radius or the part of it on screen.
+            for side in [1.0, -1.0] {
+                let spacing = r_px.min(sl.reach(f, (x, y), side)) / steps as f32;
+                let level = mip_coarsest(spacing, self.layout);
+                for j in 0..steps {
+                    let h = spacing * (j as f32 + noise.1);
+                    // Finer levels for the near steps, as `sao` reads them, never coarser than
+                    // the step spacing.
+                    let step_level = self.tap_level(h, level);
                     let Some(tap) = sl.tap(f, (x, y), h, side) else { continue };
                     let (q, at) = self.pyramid_texel(tap, step_level);
                     let z0 = self.pyramid0[q];
