@@ -159,7 +159,7 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
         // or, where the slice's line leaves the screen first, over the part on screen.
         for (var side = 0u; side < 2u; side++) {
             let along = select(1.0, -1.0, side == 1u);
-            let spacing = min(r_px, slice_reach(pixel, sl, along)) / f32(steps);
+            let spacing = slice_spacing(pixel, sl, along, r_px, steps);
             let level = mip_coarsest(spacing, ao.levels);
             for (var j = 0u; j < steps; j++) {
                 let h = spacing * (f32(j) + noise.y);

@@ -285,7 +285,7 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
             let along = select(1.0, -1.0, side == 1u);
             // The steps spread over the radius or, where the slice's line leaves the screen
             // first, over what the screen holds of it.
-            let spacing = min(r_px, slice_reach(pixel, sl, along)) / f32(steps);
+            let spacing = slice_spacing(pixel, sl, along, r_px, steps);
             let coarsest = mip_coarsest(spacing, params.levels);
             for (var j = 0u; j < steps; j++) {
                 let h = spacing * (f32(j) + noise.y);

@@ -179,13 +179,6 @@ fn cell_exit(a: vec2<f32>, d: vec2<f32>, cell: vec2<u32>, size: f32) -> f32 {
     return min(select(3.4e38, t.x, d.x != 0.0), select(3.4e38, t.y, d.y != 0.0));
 }
 
-// The segment parameter where a ray from `a` along `d` leaves the screen (at most 1).
-fn screen_exit(a: vec2<f32>, d: vec2<f32>) -> f32 {
-    let size = vec2<f32>(f32(frame.width), f32(frame.height));
-    let t = (select(vec2<f32>(0.0), size, d > vec2<f32>(0.0)) - a) / d;
-    return min(1.0, min(select(1.0, t.x, d.x != 0.0), select(1.0, t.y, d.y != 0.0)));
-}
-
 fn nearest_at(level: u32, cell: vec2<u32>) -> f32 {
     let offset = params.offsets[level / 4u][level % 4u];
     return nearest[offset + cell.y * params.widths[level / 4u][level % 4u] + cell.x];
@@ -265,7 +258,8 @@ fn march(pixel: vec2<u32>, depth: f32, p: vec3<f32>, r: vec3<f32>) -> Hit {
     let d = project(e) - a;
     let k0 = linear_of(depth);
     let k1 = linear_of(-e.z);
-    let t_end = screen_exit(a, d);
+    // Where the segment leaves the screen, if before its end.
+    let t_end = min(1.0, screen_exit(frame, a, d));
     let reach = max(abs(d.x), abs(d.y));
     if !(reach > 0.5) {
         return hit;

@@ -130,7 +130,7 @@ impl Kernel<'_> {
             // The two sides hold opposite halves of the arc; each spreads its steps over the
             // radius or the part of it on screen.
             for side in [1.0, -1.0] {
-                let spacing = r_px.min(sl.reach(f, (x, y), side)) / steps as f32;
+                let spacing = sl.spacing(f, (x, y), side, r_px, steps);
                 let level = mip_coarsest(spacing, self.layout);
                 for j in 0..steps {
                     let h = spacing * (j as f32 + noise.1);

@@ -23,3 +23,12 @@ pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
     }
     Vec3::new(ndc.x * d / f.proj[0][0], ndc.y * d / f.proj[1][1], -d)
 }
+
+/// As `screen_exit`: the parameter t where the line `a + t d` (pixel coordinates) leaves the
+/// screen, for t >= 0 and `a` on screen (3.4e38 where `d` is zero).
+pub fn screen_exit(f: &FrameUniform, a: Vec2, d: Vec2) -> f32 {
+    let exit = |a: f32, d: f32, size: u32| {
+        if d != 0.0 { ((if d > 0.0 { size as f32 } else { 0.0 }) - a) / d } else { 3.4e38 }
+    };
+    exit(a.x, d.x, f.width).min(exit(a.y, d.y, f.height))
+}

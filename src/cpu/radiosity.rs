@@ -187,7 +187,7 @@ impl Gather<'_> {
             }
             let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
             for side in [1.0, -1.0] {
-                let spacing = r_px.min(sl.reach(f, (x, y), side)) / steps as f32;
+                let spacing = sl.spacing(f, (x, y), side, r_px, steps);
                 let coarsest = mip_coarsest(spacing, self.layout);
                 for j in 0..steps {
                     let h = spacing * (j as f32 + noise.1);

@@ -3,7 +3,7 @@
 use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::composite::shaded;
-use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::frame::{mat_mul, screen_exit, view_position};
 use crate::cpu::pyramid::nearest;
 use crate::environment::Environment;
 use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform};
@@ -56,14 +56,6 @@ fn cell_exit(a: Vec2, d: Vec2, cell: UVec2, size: f32) -> f32 {
     let tx = if d.x != 0.0 { (side(cell.x, d.x) - a.x) / d.x } else { 3.4e38 };
     let ty = if d.y != 0.0 { (side(cell.y, d.y) - a.y) / d.y } else { 3.4e38 };
     tx.min(ty)
-}
-
-/// Where a ray from `a` along `d` leaves the screen (at most 1).
-fn screen_exit(f: &FrameUniform, a: Vec2, d: Vec2) -> f32 {
-    let exit = |a: f32, d: f32, size: f32| {
-        if d != 0.0 { ((if d > 0.0 { size } else { 0.0 }) - a) / d } else { 1.0 }
-    };
-    1f32.min(exit(a.x, d.x, f.width as f32).min(exit(a.y, d.y, f.height as f32)))
 }
 
 /// The march's inputs that stay the same for every pixel.
@@ -124,7 +116,8 @@ impl March<'_> {
         let e = p + r * reach_3d;
         let d = project(f, e) - a;
         let (k0, k1) = (linear_of(f, s.depth), linear_of(f, -e.z));
-        let t_end = screen_exit(f, a, d);
+        // Where the segment leaves the screen, if before its end.
+        let t_end = 1f32.min(screen_exit(f, a, d));
         let reach = d.x.abs().max(d.y.abs());
         if reach.is_nan() || reach <= 0.5 {
             return None;

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::cpu::frame::view_position;
+use crate::cpu::frame::{screen_exit, view_position};
 use crate::cpu::spiral::pixel_hash;
 use crate::frame::FrameUniform;
 
@@ -102,15 +102,18 @@ impl Slice {
         Slice { dir, v, gamma, total, weight, offset: noise.2 }
     }
 
-    /// As `slice_reach`: how far (pixels) the slice's line runs from the centre of pixel
-    /// `(x, y)` on `side` (+-1) before it leaves the screen.
-    pub fn reach(&self, f: &FrameUniform, (x, y): (u32, u32), side: f32) -> f32 {
-        let d = self.dir * side;
+    /// As `slice_spacing`: the spacing (pixels) of `steps` steps on `side` (+-1) of the slice
+    /// through pixel `(x, y)`, spread over the radius `r_px` or the part of it on screen.
+    pub fn spacing(
+        &self,
+        f: &FrameUniform,
+        (x, y): (u32, u32),
+        side: f32,
+        r_px: f32,
+        steps: u32,
+    ) -> f32 {
         let p = Vec2::new(x as f32, y as f32) + 0.5;
-        let exit = |d: f32, p: f32, size: u32| {
-            if d == 0.0 { 3.4e38 } else { ((if d > 0.0 { size as f32 } else { 0.0 }) - p) / d }
-        };
-        exit(d.x, p.x, f.width).min(exit(d.y, p.y, f.height))
+        r_px.min(screen_exit(f, p, self.dir * side)) / steps as f32
     }
 
     /// As `slice_tap`: the pixel of the step at `h` pixels on `side` (+-1) of the slice through

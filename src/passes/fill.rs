@@ -22,6 +22,11 @@ impl Fill {
         Fill { uniform, count }
     }
 
+    /// The bytes the fill covers (the `bytes` it was made for, in whole words).
+    pub(crate) fn bytes(&self) -> u64 {
+        u64::from(self.count) * 4
+    }
+
     /// Records the fill of `buffer` (of the size this fill was made for).
     pub(crate) fn record(
         &self,

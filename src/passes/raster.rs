@@ -279,7 +279,7 @@ pub(crate) struct RasterStage {
     fill: Fill,
     /// The vertex positions `Predict` expects the next frame to have, moving as they moved
     /// since the last (drawn by `raster.next` when the geometry moved), and their extrapolation.
-    predicted: Option<(wgpu::Buffer, Fill, u64)>,
+    predicted: Option<(wgpu::Buffer, Fill)>,
 }
 
 impl RasterStage {
@@ -313,11 +313,11 @@ impl RasterStage {
         self.current = 1 - self.current;
         if let Some(next) = next {
             queue.write_buffer(&self.next_frame, 0, bytemuck::bytes_of(next));
-            let bytes = u64::from(scene.counts().2) * 12;
-            if self.predicted.as_ref().is_none_or(|p| p.2 != bytes) {
+            let bytes = scene.position_bytes();
+            if self.predicted.as_ref().is_none_or(|(_, fill)| fill.bytes() != bytes) {
                 let label = "deep-gbuffer.raster.predicted";
                 let buffer = gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
-                self.predicted = Some((buffer, Fill::new(device, bytes, 0), bytes));
+                self.predicted = Some((buffer, Fill::new(device, bytes, 0)));
             }
         }
     }
@@ -373,7 +373,7 @@ impl Stage for RasterStage {
                     ..Draw::new(&self.next_frame, RasterMode::Layer0)
                 };
                 // Predict: the geometry moves on as it moved since the last frame.
-                if let (Layer1Variant::Predict, Some(earlier), Some((predicted, extrapolate, _))) =
+                if let (Layer1Variant::Predict, Some(earlier), Some((predicted, extrapolate))) =
                     (ctx.settings.layer1, ctx.previous_positions, self.predicted.as_ref())
                 {
                     let now = &ctx.scene.buffers().positions;

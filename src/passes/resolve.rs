@@ -28,9 +28,8 @@ struct Positions {
     copy: bool,
     /// The geometry moved since the last frame (`copies[latest ^ 1]` holds where it stood).
     moved: bool,
-    /// The copy of the vertex words, and their bytes.
+    /// The copy of the vertex words (as many as the scene's positions have).
     fill: Fill,
-    bytes: u64,
 }
 
 impl ResolveStage {
@@ -52,9 +51,11 @@ impl ResolveStage {
     /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed) was called since
     /// (its count is `generation`) and that frame had the same scene.
     pub(crate) fn moved(&self, scene: &SceneBuffers, generation: u64) -> bool {
-        let bytes = u64::from(scene.counts().2) * 12;
+        let bytes = scene.position_bytes();
         self.positions.as_ref().is_some_and(|p| {
-            p.of == scene.buffers().positions && p.bytes == bytes && p.generation != generation
+            p.of == scene.buffers().positions
+                && p.fill.bytes() == bytes
+                && p.generation != generation
         })
     }
 
@@ -70,9 +71,9 @@ impl ResolveStage {
     ) -> bool {
         let moved = self.moved(scene, generation);
         let positions = &scene.buffers().positions;
-        let bytes = u64::from(scene.counts().2) * 12;
+        let bytes = scene.position_bytes();
         match self.positions.as_mut() {
-            Some(p) if p.of == *positions && p.bytes == bytes => {
+            Some(p) if p.of == *positions && p.fill.bytes() == bytes => {
                 p.copy = moved;
                 p.moved = moved;
                 if moved {
@@ -94,7 +95,6 @@ impl ResolveStage {
                     copy: true,
                     moved: false,
                     fill: Fill::new(device, bytes, 0),
-                    bytes,
                 });
             }
         }

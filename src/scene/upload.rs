@@ -400,6 +400,11 @@ impl SceneBuffers {
     pub(crate) fn counts(&self) -> (u32, u32, u32) {
         (self.b.triangle_count, self.b.material_count, self.b.vertex_count)
     }
+
+    /// The bytes the vertex positions take (`f32 x 3` per vertex).
+    pub(crate) fn position_bytes(&self) -> u64 {
+        u64::from(self.b.vertex_count) * 12
+    }
 }
 
 fn light_buffer(device: &wgpu::Device, info: &SceneInfo) -> wgpu::Buffer {

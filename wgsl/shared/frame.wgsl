@@ -46,6 +46,14 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
 }
 
+// The parameter t where the line a + t d (pixel coordinates) leaves the screen, for t >= 0 and
+// a on screen (3.4e38 where d is zero).
+fn screen_exit(f: Frame, a: vec2<f32>, d: vec2<f32>) -> f32 {
+    let size = vec2<f32>(f32(f.width), f32(f.height));
+    let t = (select(vec2<f32>(0.0), size, d > vec2<f32>(0.0)) - a) / d;
+    return min(select(3.4e38, t.x, d.x != 0.0), select(3.4e38, t.y, d.y != 0.0));
+}
+
 // Where the surface at view depth d seen through pixel coordinate px was in the previous frame:
 // its clip position and view depth.
 // `FrameUniform::reproject` in src/frame/mod.rs is the same on the CPU.

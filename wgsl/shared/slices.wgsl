@@ -56,14 +56,11 @@ fn slice_tap(pixel: vec2<u32>, sl: Slice, h: f32, side: f32, tap: ptr<function, 
     return all(t >= vec2<i32>(0)) && t.x < i32(frame.width) && t.y < i32(frame.height) && any(vec2<u32>(t) != pixel);
 }
 
-// How far (pixels) the slice's line runs from the centre of `pixel` on `side` (+-1) before it
-// leaves the screen.
-fn slice_reach(pixel: vec2<u32>, sl: Slice, side: f32) -> f32 {
-    let d = sl.dir * side;
-    let p = vec2<f32>(pixel) + 0.5;
-    let size = vec2<f32>(f32(frame.width), f32(frame.height));
-    let t = (select(vec2<f32>(0.0), size, d > vec2<f32>(0.0)) - p) / d;
-    return min(select(3.4e38, t.x, d.x != 0.0), select(3.4e38, t.y, d.y != 0.0));
+// The spacing (pixels) of `steps` steps on `side` (+-1) of slice `sl` through `pixel`: they
+// spread over the radius `r_px` or, where the slice's line leaves the screen first, over the
+// part on screen (a step off screen finds nothing).
+fn slice_spacing(pixel: vec2<u32>, sl: Slice, side: f32, r_px: f32, steps: u32) -> f32 {
+    return min(r_px, screen_exit(frame, vec2<f32>(pixel) + 0.5, sl.dir * side)) / f32(steps);
 }
 
 // Antiderivative of cos(t - gamma) sin(t).
