@@ -716,7 +716,7 @@ impl Renderer {
             let reflections =
                 st.reflections.get_or_insert_with(|| ReflectionsStage::new(device, s));
             let env = self.environment.as_ref().map(|e| e.size);
-            reflections.prepare(queue, s, scene, plan.layers == 2, env);
+            reflections.prepare(queue, s, scene, plan, env);
         }
         if plan.runs(Effect::Transparency) {
             let t = st.transparency.get_or_insert_with(|| TransparencyStage::new(device, s));
@@ -1066,8 +1066,8 @@ impl Renderer {
         self.stages.direct.radiance(0)
     }
 
-    /// The direct radiance of layer 1 (computed when radiosity, reflections or depth of field
-    /// read it).
+    /// The direct radiance of layer 1 (computed when the radiosity, the depth of field or the
+    /// motion blur read it).
     pub fn direct1_buffer(&self) -> &wgpu::Buffer {
         self.stages.direct.radiance(1)
     }

@@ -4,9 +4,9 @@
 mod common;
 
 use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render, shade_fixture};
-use deep_gbuffer::cpu::reflections as cpu;
+use deep_gbuffer::cpu::{reflections as cpu, shadow as cpu_shadow};
 use deep_gbuffer::frame::ReflectionsUniform;
-use deep_gbuffer::scene::{Material, MeshData};
+use deep_gbuffer::scene::{GpuLight, Material, MeshData};
 use deep_gbuffer::{Camera, Environment, Error, Renderer, Scene, SceneBuffers, Settings};
 use glam::{Vec3, Vec4};
 
@@ -26,26 +26,36 @@ fn reflective_spheres_match_cpu_reference() {
         [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
     let reflective = layer0.iter().filter(|s| s.depth > 0.0 && s.reflectivity > 0.0).count();
     assert!(reflective > 50, "the view shows reflective spheres ({reflective})");
-    march_matches(&r.renderer, &r.frame, [&layer0, &layer1], scene.ambient, "grid");
+    march_matches(&r.renderer, &r.frame, [&layer0, &layer1], &scene, "grid");
 }
 
-/// The GPU march of `renderer`'s last frame against the CPU march on both layers, hit surfaces
-/// shaded with the frame's direct light, obscurance and gathered irradiance, and the constant
-/// ambient `ambient`.
+/// The GPU march of `renderer`'s last frame of `scene` against the CPU march on both layers,
+/// hit surfaces shaded with the scene's lights (re-lit towards the ray's origin), the frame's
+/// obscurance and gathered irradiance, and the scene's constant ambient.
 fn march_matches(
     renderer: &Renderer,
     frame: &deep_gbuffer::frame::FrameUniform,
     layers: [&[deep_gbuffer::GSample]; 2],
-    ambient: Vec3,
+    scene: &Scene,
     what: &str,
 ) {
+    let ambient = scene.ambient;
     let g = gpu();
-    let rgb = |b| read4(renderer, b).iter().map(|v| v.truncate()).collect::<Vec<_>>();
-    let direct = [rgb(renderer.direct_buffer()), rgb(renderer.direct1_buffer())];
     let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
     let irradiance = read4(renderer, renderer.radiosity_buffers().unwrap().irradiance);
+    // Hit surfaces are re-lit by the scene's lights past the CPU's own shadow maps.
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let (faces, light_faces, atlas) =
+        cpu_shadow::maps(scene, renderer.settings().shadows.resolution);
+    let shadows = cpu_shadow::Shadows {
+        faces: &faces,
+        light_faces: &light_faces,
+        atlas: &atlas,
+        pcf: renderer.settings().shadows.pcf,
+    };
     let shading = cpu::HitShading {
-        direct: [&direct[0], &direct[1]],
+        lights: &lights,
+        shadows: Some(&shadows),
         av: Some(&av),
         irradiance: Some(&irradiance),
     };
@@ -187,6 +197,135 @@ fn a_mirror_shows_a_far_wall_where_mirrored_rays_meet_it() {
     let camera =
         Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.8, -10.0), 50.0, 0.1);
     a_mirror_shows_the_wall_where_mirrored_rays_meet_it(camera, -30.0, 20.0, 3.0);
+}
+
+/// A hit surface is lit towards the point its ray left, not towards the camera: a mirror floor
+/// before a rough metal wall under a directional light shows, where its mirrored view ray meets
+/// the wall, the wall's radiance along that ray (the BRDF in closed form: a metal's light is all
+/// specular, so it depends on the direction it leaves in), which differs from what the camera
+/// sees of the same wall.
+#[test]
+fn a_mirror_shows_a_metal_wall_lit_towards_the_mirror() {
+    let mut scene = Scene::default();
+    scene.materials.push(Material {
+        name: "mirror".into(),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        reflectivity: 1.0,
+        roughness: 0.0,
+        double_sided: true,
+        ..Default::default()
+    });
+    let (albedo, roughness) = (Vec3::new(0.9, 0.8, 0.7), 0.3);
+    scene.materials.push(Material {
+        name: "metal".into(),
+        base_color: albedo.extend(1.0),
+        metallic: 1.0,
+        roughness,
+        double_sided: true,
+        ..Default::default()
+    });
+    let (wall_z, half_width, height) = (-1.0f32, 1.0f32, 1.0f32);
+    let floor = [
+        Vec3::new(-4.0, 0.0, -4.0),
+        Vec3::new(4.0, 0.0, -4.0),
+        Vec3::new(4.0, 0.0, 4.0),
+        Vec3::new(-4.0, 0.0, 4.0),
+    ];
+    let wall = [
+        Vec3::new(-half_width, 0.0, wall_z),
+        Vec3::new(half_width, 0.0, wall_z),
+        Vec3::new(half_width, height, wall_z),
+        Vec3::new(-half_width, height, wall_z),
+    ];
+    for (quad, material) in [(floor, 0), (wall, 1)] {
+        scene
+            .push_mesh(MeshData {
+                positions: &quad,
+                normals: &[],
+                uvs: &[],
+                indices: &[0, 1, 2, 0, 2, 3],
+                material,
+                ..MeshData::default()
+            })
+            .unwrap();
+    }
+    let light = deep_gbuffer::scene::Light {
+        name: "sun".into(),
+        kind: deep_gbuffer::scene::LightKind::Directional {
+            direction: Vec3::new(0.0, -0.45, -1.0).normalize(),
+        },
+        color: Vec3::ONE,
+        intensity: 3.0,
+        casts_shadows: true,
+    };
+    let radiance = Vec3::from(GpuLight::new(&light).radiance);
+    let to_light = -Vec3::new(0.0, -0.45, -1.0).normalize();
+    scene.lights.push(light);
+    let camera =
+        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
+    let (w, h) = (64u32, 48u32);
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(w, h) });
+    let g = gpu();
+    let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+    let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
+    let inv_view = camera.view().inverse();
+    let view_proj = camera.projection(w as f32 / h as f32) * camera.view();
+    let n = Vec3::Z;
+    let lit = |v: Vec3| {
+        deep_gbuffer::cpu::direct::brdf(n, v, to_light, albedo, roughness, 1.0)
+            * radiance
+            * n.dot(to_light)
+    };
+    let (mut checked, mut agree, mut apart) = (0, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let p = (y * w + x) as usize;
+            let s = &layer0[p];
+            if !(s.depth > 0.0 && s.material == 0) {
+                continue;
+            }
+            let vp = deep_gbuffer::cpu::frame::view_position(
+                &r.frame,
+                glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
+                s.depth,
+            );
+            let point = inv_view.transform_point3(vp);
+            let d = (point - camera.eye).normalize();
+            let m = Vec3::new(d.x, -d.y, d.z);
+            let t = (wall_z - point.z) / m.z;
+            let q = point + m * t;
+            let c = view_proj * q.extend(1.0);
+            let uv = glam::Vec2::new(c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
+            // Well inside the wall and clear of the screen's edge fade.
+            if !(t > 0.0
+                && q.x.abs() < 0.8 * half_width
+                && q.y > 0.15 * height
+                && q.y < 0.85 * height
+                && c.w > 0.0
+                && uv.min_element() > 0.15
+                && uv.max_element() < 0.85)
+            {
+                continue;
+            }
+            let towards_mirror = lit(-m);
+            let towards_camera = lit((camera.eye - q).normalize());
+            checked += 1;
+            let close = |e: Vec3| {
+                (refl[p].truncate() - e).abs().max_element() <= 0.02 * e.max_element() + 1e-4
+            };
+            agree += usize::from(close(towards_mirror));
+            apart += usize::from(
+                (towards_camera - towards_mirror).abs().max_element()
+                    > 0.1 * towards_mirror.max_element(),
+            );
+        }
+    }
+    assert!(checked > 50, "enough mirror pixels see the wall ({checked})");
+    assert!(apart * 2 > checked, "the camera sees the wall differently ({apart} of {checked})");
+    assert!(
+        agree as f64 >= 0.97 * checked as f64,
+        "{agree} of {checked} mirror pixels show the wall lit towards the mirror"
+    );
 }
 
 /// A convex mirror cannot see itself: every ray it reflects leaves it, so the march must find
@@ -387,7 +526,7 @@ fn reflections_of_a_stored_gbuffer_match_cpu_reference() {
         &f.renderer,
         &f.frame,
         [&f.layers[0].samples, &f.layers[1].samples],
-        f.scene.ambient,
+        &f.scene,
         GBUFFER_FIXTURES[1].0,
     );
 }

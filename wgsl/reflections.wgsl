@@ -17,17 +17,19 @@
 //   layer 1 when the frame drew it, at the pixel's depth). A hit sees the surface as the image
 //   shows it, reflections left out (wgsl/shared/shade.wgsl: direct light, emission, and the
 //   diffuse albedo times the gathered irradiance and the ambient term dimmed by the
-//   obscurance). A ray that leaves the screen, the distance or the iteration budget sees the
+//   obscurance), its direct light re-evaluated towards the point the ray left (the lights,
+//   past their shadow maps: shared/lit.wgsl). A ray that leaves the screen, the distance or the iteration budget sees the
 //   environment: the equirectangular map (src/environment.rs gives the mapping) when one is
 //   set, else the constant sky. Hits fade out near the screen edges; the confidence (alpha) is
 //   1 for a hit far from the edges, 0 for the environment. Output: reflectivity * colour.
 // src/cpu/reflections.rs is the same on the CPU.
-// defines: PACKED AO RADIOSITY
+// defines: PACKED AO RADIOSITY SHADOWS
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/gbuffer_read.wgsl"
 #include "shared/shade.wgsl"
+#include "shared/lit.wgsl"
 
 // Most cells one ray visits (each a pyramid read, or at level 0 a pixel's test).
 const ITERATIONS: u32 = 64u;
@@ -58,14 +60,23 @@ struct Reflections {
     lobe_samples: u32,
     offsets: array<vec4<u32>, 2>,
     widths: array<vec4<u32>, 2>,
+    // Lights in the light buffer, and the shadow maps' filter radius (0 without them).
+    light_count: u32,
+    pcf: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: Reflections;
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
 @group(0) @binding(3) var<storage, read> gbuffer1: array<GWord>;
-@group(0) @binding(4) var<storage, read> direct0: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> direct1: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> lights: array<Light>;
+#if SHADOWS
+@group(0) @binding(5) var<storage, read> faces: array<ShadowFace>;
+@group(0) @binding(13) var<storage, read> light_faces: array<vec2<u32>>;
+@group(0) @binding(14) var<storage, read> atlas: array<vec2<u32>>;
+#endif
 // [0]: listed tiles; then the tile indices.
 @group(0) @binding(6) var<storage, read_write> tiles: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
@@ -209,10 +220,21 @@ fn layer_hit(q: u32, r: vec3<f32>, xy_in: vec2<f32>, z_in: f32, xy_out: vec2<f32
     return 2u;
 }
 
-// What a ray that hits `layer` at pixel q sees: the surface as the image shows it
-// (shade.wgsl). Layer 1 has no gathered irradiance or obscurance of its own: the ambient term
-// reaches it through the obscurance of layer 0 at the same pixel, its nearest neighbourhood.
-fn seen_at(q: u32, layer: u32) -> vec3<f32> {
+// The direct light that sample s at pixel q sends back along the view-space ray direction d:
+// the lights (past their shadow maps) re-evaluated towards the point the ray left, so that a
+// highlight shows where the reflecting surface sees it, not where the camera does.
+fn relit(s: GSample, q: u32, d: vec3<f32>) -> vec3<f32> {
+    let centre = vec2<f32>(f32(q % frame.width), f32(q / frame.width)) + 0.5;
+    let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, centre, s.depth), 1.0)).xyz;
+    let v = -normalize(mat_mul(frame.inv_view, vec4<f32>(d, 0.0)).xyz);
+    return lit(s, world, v, params.light_count, params.pcf).radiance;
+}
+
+// What a ray along view-space direction d that hits `layer` at pixel q sees: the surface as the
+// image shows it (shade.wgsl), its direct light re-evaluated towards the ray's origin. Layer 1
+// has no gathered irradiance or obscurance of its own: the ambient term reaches it through the
+// obscurance of layer 0 at the same pixel, its nearest neighbourhood.
+fn seen_at(q: u32, layer: u32, d: vec3<f32>) -> vec3<f32> {
     var visibility = 1.0;
 #if AO
     visibility = av[q];
@@ -224,13 +246,14 @@ fn seen_at(q: u32, layer: u32) -> vec3<f32> {
 #else
         let s1 = gbuffer_decode(w, gbuffer1[q * G_WORDS + 1u], gbuffer1[q * G_WORDS + 2u], gbuffer1[q * G_WORDS + 3u]);
 #endif
-        return shaded(s1, direct1[q].rgb, visibility, vec4<f32>(0.0), params.ambient);
+        return shaded(s1, relit(s1, q, d), visibility, vec4<f32>(0.0), params.ambient);
     }
     var e = vec4<f32>(0.0);
 #if RADIOSITY
     e = irradiance[q];
 #endif
-    return shaded(sample_at(q), direct0[q].rgb, visibility, e, params.ambient);
+    let s0 = sample_at(q);
+    return shaded(s0, relit(s0, q, d), visibility, e, params.ambient);
 }
 
 // Where a reflected ray first meets a layer: pixel q, the layer (2: none) and the screen
@@ -372,7 +395,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     var mirror_trust = 0.0;
     if hit.layer < 2u {
         mirror_trust = edge_confidence(hit.xy);
-        mirror = mix(mirror, seen_at(hit.q, hit.layer), mirror_trust);
+        mirror = mix(mirror, seen_at(hit.q, hit.layer, r), mirror_trust);
     }
     let alpha = s.roughness * s.roughness;
     if !(alpha > 0.0) || params.lobe_samples <= 1u {
@@ -419,7 +442,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
                 }
                 if layer < 2u {
                     confidence = edge_confidence(xy);
-                    colour = mix(environment_view(l), seen_at(q, layer), confidence);
+                    colour = mix(environment_view(l), seen_at(q, layer, l), confidence);
                 }
             }
         }

@@ -53,6 +53,30 @@ pub fn brdf(n: Vec3, v: Vec3, l: Vec3, albedo: Vec3, roughness: f32, metallic: f
     (1.0 - metallic) * albedo / PI + distribution * visibility * fresnel
 }
 
+/// As `lit` (`wgsl/shared/lit.wgsl`): the radiance sample `s` at world point `world` sends
+/// towards the unit world direction `v` (towards the viewer) by `lights` (past their shadow maps
+/// when given), and the irradiance it receives.
+pub fn lit(
+    s: &GSample,
+    world: Vec3,
+    v: Vec3,
+    lights: &[GpuLight],
+    shadows: Option<&Shadows>,
+) -> (Vec3, Vec3) {
+    let (mut radiance, mut irradiance) = (Vec3::ZERO, Vec3::ZERO);
+    for (i, light) in lights.iter().enumerate() {
+        let (e, l) = light_at(light, world);
+        let nl = s.normal.dot(l);
+        if nl > 0.0 {
+            let visible = shadows.map_or(1.0, |sh| shadow(sh, i, light, world, s.normal, l));
+            radiance +=
+                brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic) * e * nl * visible;
+            irradiance += e * nl * visible;
+        }
+    }
+    (radiance, irradiance)
+}
+
 /// Outgoing direct radiance of every pixel of `layer` (zero where there is no surface).
 pub fn direct(
     f: &FrameUniform,
@@ -87,22 +111,8 @@ pub fn direct_and_diffuse(
             } else {
                 (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
             };
-            let mut sum = Vec3::ZERO;
-            let mut irradiance = Vec3::ZERO;
-            for (i, light) in lights.iter().enumerate() {
-                let (e, l) = light_at(light, world);
-                let nl = s.normal.dot(l);
-                if nl > 0.0 {
-                    let visible =
-                        shadows.map_or(1.0, |sh| shadow(sh, i, light, world, s.normal, l));
-                    sum += brdf(s.normal, v, l, s.base_color, s.roughness, s.metallic)
-                        * e
-                        * nl
-                        * visible;
-                    irradiance += e * nl * visible;
-                }
-            }
-            out[p] = sum;
+            let (radiance, irradiance) = lit(s, world, v, lights, shadows);
+            out[p] = radiance;
             lambert[p] = (1.0 - s.metallic) * s.base_color / PI * irradiance;
         }
     }

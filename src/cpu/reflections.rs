@@ -3,11 +3,14 @@
 use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::composite::shaded;
+use crate::cpu::direct::lit;
 use crate::cpu::frame::{mat_mul, screen_exit, view_position};
 use crate::cpu::pyramid::nearest;
+use crate::cpu::shadow::Shadows;
 use crate::environment::Environment;
 use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform};
 use crate::gbuffer::GSample;
+use crate::scene::GpuLight;
 
 /// Most cells one ray visits.
 const ITERATIONS: u32 = 64;
@@ -160,8 +163,10 @@ impl March<'_> {
 
 /// The frame's terms a hit surface is shaded with (`seen_at`).
 pub struct HitShading<'a> {
-    /// Direct radiance of each layer.
-    pub direct: [&'a [Vec3]; 2],
+    /// The lights, which re-light a hit surface towards the point its ray left.
+    pub lights: &'a [GpuLight],
+    /// Their shadow maps, when the frame draws them.
+    pub shadows: Option<&'a Shadows<'a>>,
     /// The ambient visibility, when obscurance runs.
     pub av: Option<&'a [f32]>,
     /// The gathered irradiance and coverage, when radiosity runs.
@@ -169,14 +174,24 @@ pub struct HitShading<'a> {
 }
 
 impl HitShading<'_> {
-    /// As `seen_at`: what a ray that hits `layer` at pixel q sees.
-    fn seen(&self, layers: [&[GSample]; 2], q: usize, layer: u32, ambient: Vec3) -> Vec3 {
+    /// As `seen_at`: what a ray along view-space direction `d` that hits `layer` at pixel q
+    /// sees, its direct light re-evaluated towards the ray's origin (`relit`).
+    fn seen(
+        &self,
+        f: &FrameUniform,
+        layers: [&[GSample]; 2],
+        (q, layer): (usize, u32),
+        d: Vec3,
+        ambient: Vec3,
+    ) -> Vec3 {
         let visibility = self.av.map_or(1.0, |a| a[q]);
-        if layer == 1 {
-            return shaded(&layers[1][q], self.direct[1][q], visibility, Vec4::ZERO, ambient);
-        }
-        let e = self.irradiance.map_or(Vec4::ZERO, |e| e[q]);
-        shaded(&layers[0][q], self.direct[0][q], visibility, e, ambient)
+        let s = &layers[layer as usize][q];
+        let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32) + 0.5;
+        let world = mat_mul(&f.inv_view, view_position(f, centre, s.depth).extend(1.0).to_array());
+        let v = -mat_mul(&f.inv_view, d.extend(0.0).to_array()).xyz().normalize();
+        let direct = lit(s, world.xyz(), v, self.lights, self.shadows).0;
+        let e = if layer == 1 { Vec4::ZERO } else { self.irradiance.map_or(Vec4::ZERO, |e| e[q]) };
+        shaded(s, direct, visibility, e, ambient)
     }
 }
 
@@ -272,7 +287,7 @@ pub fn reflections(
             let (mut mirror, mut mirror_trust) = (sky(r), 0.0);
             if let Some((q, layer, xy)) = hit {
                 mirror_trust = edge_confidence(xy);
-                mirror = mirror.lerp(shading.seen(layers, q, layer, ambient), mirror_trust);
+                mirror = mirror.lerp(shading.seen(f, layers, (q, layer), r, ambient), mirror_trust);
             }
             let alpha = s.roughness * s.roughness;
             if alpha.is_nan() || alpha <= 0.0 || u.lobe_samples <= 1 {
@@ -312,7 +327,7 @@ pub fn reflections(
                         };
                         if let Some(layer) = layer {
                             confidence = edge_confidence(xy);
-                            let seen = shading.seen(layers, q, layer, ambient);
+                            let seen = shading.seen(f, layers, (q, layer), l, ambient);
                             colour = sky(l).lerp(seen, confidence);
                         }
                     }

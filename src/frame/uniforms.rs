@@ -196,9 +196,16 @@ pub struct ReflectionsUniform {
     pub offsets: [[u32; 4]; 2],
     /// Level widths in texels (up to 8).
     pub widths: [[u32; 4]; 2],
+    /// Lights in the light buffer: a hit surface's direct light is re-evaluated towards the
+    /// point the ray left.
+    pub light_count: u32,
+    /// Percentage-closer filtering radius of the shadow maps in texels (0 without them).
+    pub pcf: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<ReflectionsUniform>() == 112);
+const _: () = assert!(std::mem::size_of::<ReflectionsUniform>() == 128);
 mirrored!(
     ReflectionsUniform,
     "reflections.wgsl",
@@ -215,7 +222,9 @@ mirrored!(
         two_layers,
         lobe_samples,
         offsets,
-        widths
+        widths,
+        light_count,
+        pcf
     ]
 );
 
@@ -251,7 +260,16 @@ impl ReflectionsUniform {
             lobe_samples: settings.lobe_samples,
             offsets,
             widths,
+            light_count: 0,
+            pcf: 0,
+            _pad: [0; 2],
         }
+    }
+
+    /// The same constants with `light_count` lights re-lighting hit surfaces, their shadow
+    /// maps filtered with radius `pcf` (0 without shadow maps).
+    pub fn with_lights(self, light_count: u32, pcf: u32) -> Self {
+        ReflectionsUniform { light_count, pcf, ..self }
     }
 }
 

@@ -86,12 +86,8 @@ impl Stage for DirectStage {
         let plan = ctx.plan;
         let dof_layer1 = (plan.runs(Effect::Dof) && ctx.settings.dof.two_layers)
             || (plan.runs(Effect::MotionBlur) && ctx.settings.motion_blur.two_layers);
-        let layers = if plan.runs(Effect::Radiosity) || plan.runs(Effect::Reflections) || dof_layer1
-        {
-            2
-        } else {
-            1
-        };
+        // The reflections light the surfaces their rays hit themselves.
+        let layers = if plan.runs(Effect::Radiosity) || dof_layer1 { 2 } else { 1 };
         let diffuse = plan.runs(Effect::Radiosity);
         for layer in 0..layers {
             let targets = (&self.radiance[layer], diffuse.then_some(&self.diffuse[layer]));

@@ -6,7 +6,7 @@ use super::{FrameContext, Recorder, Stage};
 use crate::SceneBuffers;
 use crate::frame::ReflectionsUniform;
 use crate::gpu::{self, slots::reflections as slot};
-use crate::plan::PassId;
+use crate::plan::{Effect, PassId, Plan};
 use crate::settings::Settings;
 
 /// The reflections: constants, layer 0's nearest-depth pyramid, the reflective tiles and their
@@ -53,24 +53,26 @@ impl ReflectionsStage {
         }
     }
 
-    /// Writes the frame's constants: `two_layers` whether the frame draws layer 1,
-    /// `environment` the map's size (`None`: the scene's ambient sky).
+    /// Writes the frame's constants for `plan` (whether it draws layer 1 and the shadow maps);
+    /// `environment`: the map's size (`None`: the scene's ambient sky).
     pub(crate) fn prepare(
         &self,
         queue: &wgpu::Queue,
         s: &Settings,
         scene: &SceneBuffers,
-        two_layers: bool,
+        plan: &Plan,
         environment: Option<(u32, u32)>,
     ) {
+        let pcf = if plan.runs(Effect::Shadows) { s.shadows.pcf } else { 0 };
         let uniform = ReflectionsUniform::new(
             &s.reflections,
             (s.width, s.height),
             self.pyramid.layout(),
-            two_layers,
+            plan.layers == 2,
             scene.info().ambient.to_array(),
             environment,
-        );
+        )
+        .with_lights(scene.info().lights.len() as u32, pcf);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 
@@ -92,16 +94,24 @@ impl Stage for ReflectionsStage {
             (slot::PARAMS, &self.uniform),
             (slot::GBUFFER, ctx.gbuffer[0]),
             (slot::GBUFFER1, ctx.gbuffer[1]),
-            (slot::DIRECT0, ctx.direct[0]),
-            (slot::DIRECT1, ctx.direct[1]),
+            (slot::LIGHTS, ctx.scene.light_buffer()),
             (slot::TILES, &self.tiles),
             (slot::ARGS, &self.args),
             (slot::REFLECTIONS, &self.output),
             (slot::ENVIRONMENT_MAP, ctx.environment.unwrap_or(&self.no_environment)),
             (slot::NEAREST, &self.nearest),
         ];
-        // A hit surface is shaded as the composite shades it, with the terms the frame has.
+        // A hit surface is shaded as the composite shades it, with the terms the frame has, and
+        // lit towards the point its ray left.
         let mut defines = ctx.settings.precision.defines();
+        if let Some(s) = &ctx.shadows {
+            defines.push("SHADOWS");
+            entries.extend([
+                (slot::FACES, s.faces),
+                (slot::LIGHT_FACES, s.light_faces),
+                (slot::ATLAS, s.atlas),
+            ]);
+        }
         for (define, s, buffer) in
             [("AO", slot::AV, ctx.av), ("RADIOSITY", slot::IRRADIANCE, ctx.irradiance)]
         {

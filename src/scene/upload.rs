@@ -408,7 +408,11 @@ impl SceneBuffers {
 }
 
 fn light_buffer(device: &wgpu::Device, info: &SceneInfo) -> wgpu::Buffer {
-    let lights: Vec<GpuLight> = info.lights.iter().map(GpuLight::new).collect();
+    let mut lights: Vec<GpuLight> = info.lights.iter().map(GpuLight::new).collect();
+    // A kernel binds at least one light (the light count says none are read).
+    if lights.is_empty() {
+        lights.push(GpuLight::zeroed());
+    }
     storage_buffer_init(device, "deep-gbuffer.scene.lights", bytemuck::cast_slice(&lights))
 }
 

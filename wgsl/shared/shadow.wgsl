@@ -40,3 +40,43 @@ fn shadow_texel_world(f: ShadowFace, world: vec3<f32>) -> f32 {
     }
     return f.texel * max(-mat_mul(f.view, vec4<f32>(world, 1.0)).z, 0.0);
 }
+
+#if SHADOWS
+// The share of `light` (the i-th) that reaches the world point `world` (normal n, unit l towards
+// the light) past its shadow map, with (2 pcf + 1)^2 taps. Reads the including kernel's
+// bindings `faces` (ShadowFace per face), `light_faces` ((first face, face count) per light,
+// count 0 for a light without shadow) and `atlas` (the faces' visibility words back to back).
+fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>, pcf: u32) -> f32 {
+    let info = light_faces[i];
+    if info.y == 0u {
+        return 1.0;
+    }
+    let f = faces[info.x + shadow_face_index(info.y, world - light.position)];
+    let texel = shadow_texel_world(f, world);
+    let p = world + n * (texel * SHADOW_NORMAL_OFFSET_TEXELS);
+    let c = mat_mul(f.proj, mat_mul(f.view, vec4<f32>(p, 1.0)));
+    if !(c.w > 0.0) {
+        return 1.0;
+    }
+    let res = f32(f.resolution);
+    let uv = vec2<f32>((c.x / c.w * 0.5 + 0.5) * res, (0.5 - c.y / c.w * 0.5) * res);
+    let depth = -mat_mul(f.view, vec4<f32>(p, 1.0)).z;
+    let cos_theta = clamp(dot(n, l), 0.05, 1.0);
+    let tan_theta = sqrt(1.0 - cos_theta * cos_theta) / cos_theta;
+    let bias = texel * (SHADOW_BIAS_TEXELS + SHADOW_SLOPE_TEXELS * min(tan_theta, 10.0));
+    let center = vec2<i32>(floor(uv));
+    let k = i32(pcf);
+    var lit = 0.0;
+    for (var dy = -k; dy <= k; dy++) {
+        for (var dx = -k; dx <= k; dx++) {
+            let t = clamp(center + vec2<i32>(dx, dy), vec2<i32>(0), vec2<i32>(i32(f.resolution) - 1));
+            let word = atlas[f.offset + u32(t.y) * f.resolution + u32(t.x)];
+            if word.y == 0xffffffffu || depth <= bitcast<f32>(word.y) + bias {
+                lit += 1.0;
+            }
+        }
+    }
+    let side = f32(2 * k + 1);
+    return lit / (side * side);
+}
+#endif
