@@ -5,7 +5,9 @@
 //!   light and shadows, no obscurance, radiosity or reflections), of the GI frame through a
 //!   lens (depth of field) and of the GI frame with the shutter open while the camera turns
 //!   (motion blur) on the Cornell box and a dense scene at 256x256 and 1920x1080; the ratio of
-//!   the first two is what the GI costs.
+//!   the first two is what the GI costs. Each GI frame's passes are also set against their byte
+//!   floor: the bytes each binds (`PassTiming::read_bytes`, `written_bytes`) at the bandwidth
+//!   measured at the start of the run (`gpu::measure_bandwidth`).
 //! - `triangles`: the two-layer raster (two-pass) and the resolve of `grid-N` for N from 1K to
 //!   5M triangles at 640x360; the slope is milliseconds per million triangles.
 //! - `resolution`: every pass of the Cornell frame from 256x256 to 3840x2160; the slope of each
@@ -28,7 +30,7 @@ use std::time::Duration;
 
 use common::PassTotals;
 use criterion::{Criterion, SamplingMode};
-use deep_gbuffer::gpu::{Gpu, GpuOptions};
+use deep_gbuffer::gpu::{Bandwidth, Gpu, GpuOptions};
 use deep_gbuffer::{Effects, Renderer, SceneBuffers, Settings};
 
 /// One criterion function timing whole frames of `settings`; the per-pass means come back.
@@ -72,7 +74,27 @@ fn direct_only() -> Effects {
     Effects { ao: false, radiosity: false, reflections: false, ..Effects::default() }
 }
 
-fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
+/// Each pass of `t` against its byte floor: the bytes it binds at `bandwidth`.
+fn floor_table(out: &mut String, t: &PassTotals, bandwidth: &Bandwidth) {
+    let _ = writeln!(
+        out,
+        "| pass (GI frame) | ms | MB read | MB written | byte floor ms | ms / floor |\n|---|---:|---:|---:|---:|---:|"
+    );
+    for (pass, &(read, written)) in &t.bytes {
+        let floor = bandwidth.floor_ms(read, written);
+        let ms = t.mean(pass);
+        let _ = writeln!(
+            out,
+            "| `{pass}` | {ms:.2} | {:.1} | {:.1} | {floor:.3} | {:.1} |",
+            read as f64 / 1e6,
+            written as f64 / 1e6,
+            ms / floor
+        );
+    }
+    out.push('\n');
+}
+
+fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String, bandwidth: Option<&Bandwidth>) {
     let scenes = common::list("DEEP_GBUFFER_BENCH_SCENES", "cornell,grid-100000");
     let sizes = common::sizes("DEEP_GBUFFER_BENCH_SIZES", "256x256,1920x1080");
     let _ =
@@ -139,6 +161,9 @@ fn passes(c: &mut Criterion, gpu: &Gpu, out: &mut String) {
             }
             let (f, d, l, m) = (full.frame(), direct.frame(), lens.frame(), shutter.frame());
             let _ = writeln!(out, "| total | {f:.2} | {d:.2} | {l:.2} | {m:.2} |\n");
+            if let Some(bandwidth) = bandwidth {
+                floor_table(out, &full, bandwidth);
+            }
             let _ = writeln!(
                 ratios,
                 "| {name} | {w}x{h} | {:.2} | {:.2} | {:.2} |",
@@ -306,13 +331,27 @@ fn main() {
         common::list("DEEP_GBUFFER_BENCH_GROUPS", "passes,triangles,resolution,transparency");
     let mut c = Criterion::default().configure_from_args();
     let mut out = format!(
-        "Device: {}\nAt the start: {}\n\n",
+        "Device: {}\nAt the start: {}\n",
         gpu.describe(),
         deep_gbuffer::gpu::describe_load()
     );
+    // The byte floors' bandwidth, measured in this run (64 MiB read and written, best of three).
+    let bandwidth = deep_gbuffer::gpu::measure_bandwidth(&gpu.device, &gpu.queue, 64 << 20)
+        .expect("the bandwidth probe runs");
+    match &bandwidth {
+        Some(b) => {
+            let _ = writeln!(
+                out,
+                "Bandwidth: read {:.1} GB/s, write {:.1} GB/s\n",
+                b.read_bytes_per_s / 1e9,
+                b.write_bytes_per_s / 1e9
+            );
+        }
+        None => out.push_str("Bandwidth: not measured (no timestamps)\n\n"),
+    }
     for group in &groups {
         match group.as_str() {
-            "passes" => passes(&mut c, &gpu, &mut out),
+            "passes" => passes(&mut c, &gpu, &mut out, bandwidth.as_ref()),
             "triangles" => triangles(&mut c, &gpu, &mut out),
             "resolution" => resolution(&mut c, &gpu, &mut out),
             "transparency" => transparency(&mut c, &gpu, &mut out),

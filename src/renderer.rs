@@ -289,6 +289,8 @@ pub struct Renderer {
     last_frame: Option<FrameUniform>,
     plan: Option<Plan>,
     recorded: Vec<PassId>,
+    /// The bytes each of the last frame's passes binds.
+    traffic: Vec<crate::gpu::PassTraffic>,
     environment: Option<EnvironmentBuffer>,
     /// The last frame [`render`](Renderer::render) submitted, still perhaps on the GPU.
     in_flight: Option<wgpu::SubmissionIndex>,
@@ -424,6 +426,7 @@ impl Renderer {
             last_frame: None,
             plan: None,
             recorded: Vec::new(),
+            traffic: Vec::new(),
             environment: None,
             in_flight: None,
             geometry_generation: 0,
@@ -634,7 +637,7 @@ impl Renderer {
         for pass in &plan.passes {
             stages.get(pass.stage()).record(pass, &ctx, &mut rec);
         }
-        self.recorded = rec.finish();
+        (self.recorded, self.traffic) = rec.finish();
         debug_assert_eq!(self.recorded, plan.passes, "the recorded passes are the plan's");
         if let Some(shadows) = self.stages.shadows.as_mut() {
             shadows.drew(scene, &plan, self.shadow_generation);
@@ -942,12 +945,26 @@ impl Renderer {
     }
 
     /// Per-pass GPU times of the last submitted frame (empty without `TIMESTAMP_QUERY`), named
-    /// as [`PassId::name`] spells them.
+    /// as [`PassId::name`] spells them, with the bytes each pass binds ([`Renderer::traffic`]).
     pub fn timings(&self, device: &wgpu::Device) -> Result<Vec<PassTiming>> {
-        match &self.timestamps {
-            Some(t) => t.read(device),
-            None => Ok(Vec::new()),
+        let mut timings = match &self.timestamps {
+            Some(t) => t.read(device)?,
+            None => Vec::new(),
+        };
+        for t in &mut timings {
+            if let Some(traffic) = self.traffic.iter().find(|p| p.name == t.name) {
+                (t.read_bytes, t.written_bytes) = (traffic.read_bytes, traffic.written_bytes);
+            }
         }
+        Ok(timings)
+    }
+
+    /// The bytes each pass of the last recorded frame binds (each storage buffer once per pass,
+    /// at its whole size, read-only or read-write), in the order the passes ran: divided by the
+    /// device's bandwidth ([`measure_bandwidth`](crate::gpu::measure_bandwidth)), the time under
+    /// which a pass that reads and writes each of those bytes once cannot run.
+    pub fn traffic(&self) -> &[crate::gpu::PassTraffic] {
+        &self.traffic
     }
 
     /// The visibility buffer of `layer` (0 or 1): `u64` words `(depth bits << 32) | triangle id`.

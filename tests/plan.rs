@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{gpu, render_frames};
+use common::{gpu, render, render_frames};
 use deep_gbuffer::{
     AoSettings, Effect, Effects, Layer1Variant, PassId, Plan, Reason, Scene, SceneInfo, Settings,
 };
@@ -307,4 +307,37 @@ fn a_radius_under_a_pixel_leaves_its_effect_out() {
     let r = render_frames(&scene, &[far], settings);
     let passes = r.renderer.passes();
     assert!(!passes.contains(&PassId::Ao) && !passes.contains(&PassId::Radiosity), "{passes:?}");
+}
+
+/// Each pass's bytes: every storage buffer it binds, once, at its size. The direct pass of the
+/// Cornell box (radiosity on, so both layers and their Lambertian parts) writes exactly four
+/// images of `vec4<f32>`, and reads at least both G-buffer layers; every pass that ran has its
+/// bytes; the device's bandwidth is measured and turns them into a floor below the pass's time.
+#[test]
+fn passes_report_the_bytes_they_bind() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let (w, h) = (48u32, 36u32);
+    let r = render(&scene, &scene.camera_or_default(), Settings::with_size(w, h));
+    let g = gpu();
+    let pixels = u64::from(w * h);
+    let timings = r.renderer.timings(&g.device).unwrap();
+    let direct = timings.iter().find(|t| t.name == "direct").expect("the direct pass ran");
+    assert_eq!(direct.written_bytes, 4 * pixels * 16, "radiance and diffuse of both layers");
+    let gbuffers = r.renderer.gbuffer_buffer(0).size() + r.renderer.gbuffer_buffer(1).size();
+    assert!(direct.read_bytes >= gbuffers, "{} < {gbuffers}", direct.read_bytes);
+    for t in &timings {
+        assert!(t.read_bytes + t.written_bytes > 0, "{} binds nothing", t.name);
+    }
+    let traffic = r.renderer.traffic();
+    assert_eq!(
+        traffic.iter().map(|t| t.name.as_str()).collect::<Vec<_>>(),
+        timings.iter().map(|t| t.name.as_str()).collect::<Vec<_>>()
+    );
+    let bandwidth = deep_gbuffer::gpu::measure_bandwidth(&g.device, &g.queue, 16 << 20)
+        .unwrap()
+        .expect("the test device has timestamps");
+    assert!(bandwidth.read_bytes_per_s > 1e8 && bandwidth.read_bytes_per_s.is_finite());
+    assert!(bandwidth.write_bytes_per_s > 1e8 && bandwidth.write_bytes_per_s.is_finite());
+    let floor = bandwidth.floor_ms(direct.read_bytes, direct.written_bytes);
+    assert!(floor > 0.0 && floor.is_finite());
 }

@@ -48,6 +48,8 @@ pub struct PassTotals {
     pub ms: BTreeMap<String, f64>,
     /// Frames summed.
     pub frames: u64,
+    /// Pass name to the bytes it binds for reading and for writing (the last frame's).
+    pub bytes: BTreeMap<String, (u64, u64)>,
 }
 
 impl PassTotals {
@@ -86,6 +88,7 @@ pub fn timed_frames(
         let camera = &cameras[totals.frames as usize % cameras.len()];
         renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
         for t in renderer.timings(&gpu.device).unwrap() {
+            totals.bytes.insert(t.name.clone(), (t.read_bytes, t.written_bytes));
             *totals.ms.entry(t.name).or_default() += t.ms;
             sum += t.ms;
         }

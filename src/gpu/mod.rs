@@ -2,9 +2,11 @@
 //! borrows a device), shader loading, pipelines whose bindings are reflected from the shaders,
 //! GPU timestamps and buffer read-back.
 
+mod bandwidth;
 mod pipeline;
 pub(crate) mod preprocess;
 mod timestamps;
+pub(crate) mod traffic;
 
 mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
@@ -14,9 +16,11 @@ use wgpu::util::DeviceExt;
 
 use crate::{Error, Result};
 
+pub use bandwidth::{Bandwidth, measure_bandwidth};
 pub(crate) use pipeline::{Pipelines, Slot, slots};
 pub use timestamps::PassTiming;
 pub use timestamps::Timestamps;
+pub use traffic::PassTraffic;
 
 /// The WGSL text of `wgsl/<name>` with `defines`, includes expanded.
 pub fn shader_source(name: &str, defines: &[&str]) -> String {

@@ -154,6 +154,18 @@ impl Pipeline {
                     })
             })
             .collect();
+        for ((_, ty), resource) in self.uses.iter().zip(&key) {
+            if let (
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    ..
+                },
+                Bound::Buffer(buffer),
+            ) = (ty, resource)
+            {
+                super::traffic::bound(buffer, !read_only);
+            }
+        }
         let mut groups = self.groups.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some(i) = groups.iter().position(|(k, _)| *k == key) {
             // Most recently used last.

@@ -7,6 +7,11 @@ pub struct PassTiming {
     pub name: String,
     /// Milliseconds between the pass's first and last timestamp.
     pub ms: f64,
+    /// Bytes of the storage buffers the pass binds read-only (0 where not counted: see
+    /// [`PassTraffic`](super::PassTraffic)).
+    pub read_bytes: u64,
+    /// Bytes of the storage buffers the pass binds read-write.
+    pub written_bytes: u64,
 }
 
 /// A query set with room for `capacity` passes, and the names written this frame.
@@ -95,21 +100,33 @@ impl Timestamps {
         encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, u64::from(n) * 8);
     }
 
-    /// Reads the timings of the last submitted frame (waits for the GPU). Passes that share a
-    /// name are added up.
-    pub fn read(&self, device: &wgpu::Device) -> crate::Result<Vec<PassTiming>> {
+    /// Reads the milliseconds of each pass of the last submitted frame, in order (waits for the
+    /// GPU).
+    pub fn read_each(&self, device: &wgpu::Device) -> crate::Result<Vec<(String, f64)>> {
         if self.names.is_empty() {
             return Ok(Vec::new());
         }
         let bytes = super::map_read(device, &self.staging)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        Ok(self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let (a, b) = (ticks[2 * i], ticks[2 * i + 1]);
+                (name.clone(), b.saturating_sub(a) as f64 * f64::from(self.period_ns) / 1e6)
+            })
+            .collect())
+    }
+
+    /// Reads the timings of the last submitted frame (waits for the GPU). Passes that share a
+    /// name are added up.
+    pub fn read(&self, device: &wgpu::Device) -> crate::Result<Vec<PassTiming>> {
         let mut out: Vec<PassTiming> = Vec::new();
-        for (i, name) in self.names.iter().enumerate() {
-            let (a, b) = (ticks[2 * i], ticks[2 * i + 1]);
-            let ms = b.saturating_sub(a) as f64 * f64::from(self.period_ns) / 1e6;
-            match out.iter_mut().find(|t| &t.name == name) {
+        for (name, ms) in self.read_each(device)? {
+            match out.iter_mut().find(|t| t.name == name) {
                 Some(t) => t.ms += ms,
-                None => out.push(PassTiming { name: name.clone(), ms }),
+                None => out.push(PassTiming { name, ms, read_bytes: 0, written_bytes: 0 }),
             }
         }
         Ok(out)

@@ -27,12 +27,13 @@ pub(crate) mod transparency;
 pub(crate) mod upsample;
 
 use crate::SceneBuffers;
-use crate::gpu::{Pipelines, Timestamps};
+use crate::gpu::{PassTraffic, Pipelines, Timestamps, traffic};
 use crate::plan::{PassId, Plan};
 use crate::settings::Settings;
 
 /// Records a frame's passes into the caller's encoder, each in a compute pass of its own, named
-/// by its [`PassId`] and timed when timestamps are on.
+/// by its [`PassId`], timed when timestamps are on, and with the bytes it binds counted
+/// ([`traffic`]).
 pub(crate) struct Recorder<'a> {
     encoder: &'a mut wgpu::CommandEncoder,
     timestamps: Option<&'a mut Timestamps>,
@@ -47,6 +48,7 @@ impl<'a> Recorder<'a> {
         if let Some(t) = timestamps.as_deref_mut() {
             t.reset();
         }
+        traffic::begin();
         Recorder { encoder, timestamps, recorded: Vec::new() }
     }
 
@@ -54,6 +56,7 @@ impl<'a> Recorder<'a> {
     pub(crate) fn pass(&mut self, id: &PassId) -> wgpu::ComputePass<'static> {
         self.recorded.push(id.clone());
         let name = id.name();
+        traffic::pass(&name);
         let label = format!("deep-gbuffer.{name}");
         let timestamp_writes = self.timestamps.as_deref_mut().and_then(|t| t.pass(&name));
         self.encoder
@@ -69,12 +72,13 @@ impl<'a> Recorder<'a> {
         self.encoder
     }
 
-    /// Resolves the timestamps and returns the passes recorded, in order.
-    pub(crate) fn finish(self) -> Vec<PassId> {
+    /// Resolves the timestamps and returns the passes recorded, in order, and the bytes each
+    /// binds.
+    pub(crate) fn finish(self) -> (Vec<PassId>, Vec<PassTraffic>) {
         if let Some(t) = &self.timestamps {
             t.resolve(self.encoder);
         }
-        self.recorded
+        (self.recorded, traffic::finish())
     }
 }
 
