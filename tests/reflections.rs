@@ -73,16 +73,9 @@ fn march_matches(
     assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
 }
 
-/// A mirror floor (reflectivity 1, black) and a glowing red wall standing on it at `wall_z`,
-/// seen by `camera`, with the default settings: a floor pixel shows the wall's red exactly
-/// when its mirrored view ray meets the wall (worked out here in closed form) where the screen
-/// shows the wall, the sky when the ray misses the wall.
-fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
-    camera: Camera,
-    wall_z: f32,
-    half_width: f32,
-    height: f32,
-) {
+/// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
+/// it at `wall_z`, `half_width` either side of x = 0 and `height` tall.
+fn mirror_before_a_wall(wall: Material, wall_z: f32, half_width: f32, height: f32) -> Scene {
     let mut scene = Scene::default();
     scene.materials.push(Material {
         name: "mirror".into(),
@@ -92,13 +85,7 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
         double_sided: true,
         ..Default::default()
     });
-    scene.materials.push(Material {
-        name: "glow".into(),
-        base_color: Vec4::ZERO.with_w(1.0),
-        emissive: Vec3::new(1.0, 0.0, 0.0),
-        double_sided: true,
-        ..Default::default()
-    });
+    scene.materials.push(Material { double_sided: true, ..wall });
     let side = 4.0 * half_width.max(-wall_z);
     let floor = [
         Vec3::new(-side, 0.0, -side),
@@ -106,13 +93,13 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
         Vec3::new(side, 0.0, side),
         Vec3::new(-side, 0.0, side),
     ];
-    let wall = [
+    let quad = [
         Vec3::new(-half_width, 0.0, wall_z),
         Vec3::new(half_width, 0.0, wall_z),
         Vec3::new(half_width, height, wall_z),
         Vec3::new(-half_width, height, wall_z),
     ];
-    for (quad, material) in [(floor, 0), (wall, 1)] {
+    for (quad, material) in [(floor, 0), (quad, 1)] {
         scene
             .push_mesh(MeshData {
                 positions: &quad,
@@ -124,15 +111,37 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
             })
             .unwrap();
     }
-    scene.ambient = Vec3::new(0.0, 0.0, 0.5);
-    let (w, h) = (64u32, 48u32);
-    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(w, h) });
+    scene
+}
+
+/// A mirror pixel's view ray, mirrored in the floor, worked out in closed form.
+struct MirroredRay {
+    /// The pixel.
+    p: usize,
+    /// The mirrored ray's direction (world space).
+    m: Vec3,
+    /// Where it meets the wall's plane.
+    q: Vec3,
+    /// The ray meets the wall away from its border by a margin for pixel steps, where the
+    /// screen shows it clear of the edge fade.
+    hits: bool,
+    /// The ray clearly misses the wall.
+    misses: bool,
+}
+
+/// The mirrored view ray of every floor pixel of `r` (rendered through `camera`) against the
+/// wall of [`mirror_before_a_wall`].
+fn mirrored_rays(
+    r: &common::Rendered,
+    camera: &Camera,
+    (wall_z, half_width, height): (f32, f32, f32),
+) -> Vec<MirroredRay> {
     let g = gpu();
+    let (w, h) = (r.frame.width, r.frame.height);
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
-    let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
     let inv_view = camera.view().inverse();
     let view_proj = camera.projection(w as f32 / h as f32) * camera.view();
-    let (mut agree, mut checked, mut hits) = (0, 0, 0);
+    let mut out = Vec::new();
     for y in 0..h {
         for x in 0..w {
             let p = (y * w + x) as usize;
@@ -154,25 +163,52 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
             // Where the screen shows q, in [0, 1]^2 (the march sees only what is on screen).
             let c = view_proj * q.extend(1.0);
             let uv = glam::Vec2::new(c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
-            // Hit the wall, away from its border by a margin for pixel steps, where the screen
-            // shows it clear of the edge fade.
-            let expected_hit = t > 0.0
+            let hits = t > 0.0
                 && q.x.abs() < 0.8 * half_width
                 && q.y > 0.15 * height
                 && q.y < 0.85 * height
                 && c.w > 0.0
                 && uv.min_element() > 0.15
                 && uv.max_element() < 0.85;
-            let clear_miss = t <= 0.0 || q.x.abs() > 1.3 * half_width || q.y > 1.3 * height;
-            let red = refl[p].x > 0.5 && refl[p].z < 0.2;
-            // The sky is blue; a black pixel would be the mirror hitting itself.
-            let sky = refl[p].x < 0.1 && refl[p].z > 0.4;
-            hits += usize::from(expected_hit && red);
-            if expected_hit || clear_miss {
-                checked += 1;
-                if (expected_hit && red) || (clear_miss && sky) {
-                    agree += 1;
-                }
+            let misses = t <= 0.0 || q.x.abs() > 1.3 * half_width || q.y > 1.3 * height;
+            out.push(MirroredRay { p, m, q, hits, misses });
+        }
+    }
+    out
+}
+
+/// A mirror floor and a glowing red wall standing on it at `wall_z`, seen by `camera`, with the
+/// default settings: a floor pixel shows the wall's red exactly when its mirrored view ray meets
+/// the wall (worked out here in closed form) where the screen shows the wall, the sky when the
+/// ray misses the wall.
+fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
+    camera: Camera,
+    wall_z: f32,
+    half_width: f32,
+    height: f32,
+) {
+    let glow = Material {
+        name: "glow".into(),
+        base_color: Vec4::ZERO.with_w(1.0),
+        emissive: Vec3::new(1.0, 0.0, 0.0),
+        ..Default::default()
+    };
+    let mut scene = mirror_before_a_wall(glow, wall_z, half_width, height);
+    scene.ambient = Vec3::new(0.0, 0.0, 0.5);
+    let (w, h) = (64u32, 48u32);
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(w, h) });
+    let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
+    let (mut agree, mut checked, mut hits) = (0, 0, 0);
+    for ray in mirrored_rays(&r, &camera, (wall_z, half_width, height)) {
+        let v = refl[ray.p];
+        let red = v.x > 0.5 && v.z < 0.2;
+        // The sky is blue; a black pixel would be the mirror hitting itself.
+        let sky = v.x < 0.1 && v.z > 0.4;
+        hits += usize::from(ray.hits && red);
+        if ray.hits || ray.misses {
+            checked += 1;
+            if (ray.hits && red) || (ray.misses && sky) {
+                agree += 1;
             }
         }
     }
@@ -206,119 +242,48 @@ fn a_mirror_shows_a_far_wall_where_mirrored_rays_meet_it() {
 /// sees of the same wall.
 #[test]
 fn a_mirror_shows_a_metal_wall_lit_towards_the_mirror() {
-    let mut scene = Scene::default();
-    scene.materials.push(Material {
-        name: "mirror".into(),
-        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
-        reflectivity: 1.0,
-        roughness: 0.0,
-        double_sided: true,
-        ..Default::default()
-    });
     let (albedo, roughness) = (Vec3::new(0.9, 0.8, 0.7), 0.3);
-    scene.materials.push(Material {
+    let metal = Material {
         name: "metal".into(),
         base_color: albedo.extend(1.0),
         metallic: 1.0,
         roughness,
-        double_sided: true,
         ..Default::default()
-    });
-    let (wall_z, half_width, height) = (-1.0f32, 1.0f32, 1.0f32);
-    let floor = [
-        Vec3::new(-4.0, 0.0, -4.0),
-        Vec3::new(4.0, 0.0, -4.0),
-        Vec3::new(4.0, 0.0, 4.0),
-        Vec3::new(-4.0, 0.0, 4.0),
-    ];
-    let wall = [
-        Vec3::new(-half_width, 0.0, wall_z),
-        Vec3::new(half_width, 0.0, wall_z),
-        Vec3::new(half_width, height, wall_z),
-        Vec3::new(-half_width, height, wall_z),
-    ];
-    for (quad, material) in [(floor, 0), (wall, 1)] {
-        scene
-            .push_mesh(MeshData {
-                positions: &quad,
-                normals: &[],
-                uvs: &[],
-                indices: &[0, 1, 2, 0, 2, 3],
-                material,
-                ..MeshData::default()
-            })
-            .unwrap();
-    }
+    };
+    let wall = (-1.0f32, 1.0f32, 1.0f32);
+    let mut scene = mirror_before_a_wall(metal, wall.0, wall.1, wall.2);
+    let travel = Vec3::new(0.0, -0.45, -1.0).normalize();
     let light = deep_gbuffer::scene::Light {
         name: "sun".into(),
-        kind: deep_gbuffer::scene::LightKind::Directional {
-            direction: Vec3::new(0.0, -0.45, -1.0).normalize(),
-        },
+        kind: deep_gbuffer::scene::LightKind::Directional { direction: travel },
         color: Vec3::ONE,
         intensity: 3.0,
         casts_shadows: true,
     };
     let radiance = Vec3::from(GpuLight::new(&light).radiance);
-    let to_light = -Vec3::new(0.0, -0.45, -1.0).normalize();
     scene.lights.push(light);
     let camera =
         Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
     let (w, h) = (64u32, 48u32);
     let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(w, h) });
-    let g = gpu();
-    let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
     let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
-    let inv_view = camera.view().inverse();
-    let view_proj = camera.projection(w as f32 / h as f32) * camera.view();
-    let n = Vec3::Z;
+    // The wall faces +z; its radiance towards unit v.
+    let (n, to_light) = (Vec3::Z, -travel);
     let lit = |v: Vec3| {
         deep_gbuffer::cpu::direct::brdf(n, v, to_light, albedo, roughness, 1.0)
             * radiance
             * n.dot(to_light)
     };
     let (mut checked, mut agree, mut apart) = (0, 0, 0);
-    for y in 0..h {
-        for x in 0..w {
-            let p = (y * w + x) as usize;
-            let s = &layer0[p];
-            if !(s.depth > 0.0 && s.material == 0) {
-                continue;
-            }
-            let vp = deep_gbuffer::cpu::frame::view_position(
-                &r.frame,
-                glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
-                s.depth,
-            );
-            let point = inv_view.transform_point3(vp);
-            let d = (point - camera.eye).normalize();
-            let m = Vec3::new(d.x, -d.y, d.z);
-            let t = (wall_z - point.z) / m.z;
-            let q = point + m * t;
-            let c = view_proj * q.extend(1.0);
-            let uv = glam::Vec2::new(c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
-            // Well inside the wall and clear of the screen's edge fade.
-            if !(t > 0.0
-                && q.x.abs() < 0.8 * half_width
-                && q.y > 0.15 * height
-                && q.y < 0.85 * height
-                && c.w > 0.0
-                && uv.min_element() > 0.15
-                && uv.max_element() < 0.85)
-            {
-                continue;
-            }
-            let towards_mirror = lit(-m);
-            let towards_camera = lit((camera.eye - q).normalize());
-            checked += 1;
-            let close = |e: Vec3| {
-                (refl[p].truncate() - e).abs().max_element() <= 0.02 * e.max_element() + 1e-4
-            };
-            agree += usize::from(close(towards_mirror));
-            apart += usize::from(
-                (towards_camera - towards_mirror).abs().max_element()
-                    > 0.1 * towards_mirror.max_element(),
-            );
-        }
+    for ray in mirrored_rays(&r, &camera, wall).into_iter().filter(|ray| ray.hits) {
+        let towards_mirror = lit(-ray.m);
+        let towards_camera = lit((camera.eye - ray.q).normalize());
+        let off = |e: Vec3, by: Vec3, within: f32| (e - by).abs().max_element() > within;
+        checked += 1;
+        let tolerance = 0.02 * towards_mirror.max_element() + 1e-4;
+        agree += usize::from(!off(refl[ray.p].truncate(), towards_mirror, tolerance));
+        apart +=
+            usize::from(off(towards_camera, towards_mirror, 0.1 * towards_mirror.max_element()));
     }
     assert!(checked > 50, "enough mirror pixels see the wall ({checked})");
     assert!(apart * 2 > checked, "the camera sees the wall differently ({apart} of {checked})");
