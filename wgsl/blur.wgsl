@@ -1,13 +1,13 @@
 // Separable depth- and normal-aware (bilateral) blur of a scalar image (or, with VEC4, of a
 // vec4 image), one direction per dispatch (VERTICAL or not). A tap's weight is a Gaussian of its
 // distance times shared/bilateral.wgsl's depth and normal weight, so nothing bleeds across depth
-// edges or creases; pixels without a surface are skipped.
+// edges or creases; pixels without a surface are skipped. Each tap reads the first word of its
+// G-buffer record alone (depth and normal), not the whole record.
 // src/cpu/blur.rs is the same on the CPU.
 // defines: PACKED VERTICAL VEC4
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
-#include "shared/gbuffer_read.wgsl"
 #include "shared/bilateral.wgsl"
 
 
@@ -34,8 +34,9 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = gid.y * frame.width + gid.x;
-    let center = sample_at(p);
-    if !(center.depth > 0.0) || RADIUS == 0u {
+    let centre = gbuffer[p * G_WORDS];
+    let zc = gword_depth(centre);
+    if !(zc > 0.0) || RADIUS == 0u {
         blurred[p] = source[p];
         return;
     }
@@ -54,13 +55,14 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let q = u32(tap.y) * frame.width + u32(tap.x);
-        let s = sample_at(q);
-        if !(s.depth > 0.0) {
+        let word = gbuffer[q * G_WORDS];
+        let z = gword_depth(word);
+        if !(z > 0.0) {
             continue;
         }
         let fk = f32(k);
         let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
-        let w = gauss * bilateral_weight(s.depth, s.normal, center.depth, center.normal);
+        let w = gauss * bilateral_weight(z, gword_normal(word), zc, gword_normal(centre));
         sum += w * source[q];
         weights += w;
     }
