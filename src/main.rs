@@ -116,9 +116,10 @@ struct SweepArgs {
     /// Position encodings to sweep.
     #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().position))]
     position_encoding: Vec<PositionEncoding>,
-    /// Radiosity gather radii to sweep, in scene units.
-    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_radius))]
-    radiosity_radius: Vec<f32>,
+    /// Radiosity gather radii to sweep, in scene units [default: the default radius scaled to
+    /// the scene, as `render` takes it].
+    #[arg(long, value_delimiter = ',')]
+    radiosity_radius: Option<Vec<f32>>,
     /// Obscurance pyramid level offsets to sweep (a tap at h pixels reads level log2 h - offset).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().mip_offset))]
     mip_offset: Vec<u32>,
@@ -144,9 +145,10 @@ struct SweepArgs {
     /// the camera turns; the truth is traced over each shutter).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().shutter))]
     shutter: Vec<f32>,
-    /// Layer separations Δz to sweep, in scene units.
-    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dz))]
-    dz: Vec<f32>,
+    /// Layer separations Δz to sweep, in scene units [default: the default Δz scaled to the
+    /// scene, as `render` takes it].
+    #[arg(long, value_delimiter = ',')]
+    dz: Option<Vec<f32>>,
     /// Layer-1 variants to sweep.
     #[arg(long, value_delimiter = ',', value_enum, default_value = listed_names(&deep_gbuffer::sweep::Grid::default().layer1))]
     layer1: Vec<Layer1Variant>,
@@ -848,6 +850,15 @@ impl Progress {
 fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     use deep_gbuffer::sweep;
     let (w, h) = args.size;
+    let (scene, camera) = scene_and_camera(
+        &args.scene,
+        args.camera.as_deref(),
+        fit(args.fit, args.size),
+        &args.limits,
+    )?;
+    // Every configuration starts from the defaults with their lengths scaled to the scene (the
+    // obscurance radius, which the truth is traced with, among them), as `render` takes them.
+    let base = scaled_defaults(&scene);
     let grid = sweep::Grid {
         ao_estimator: args.ao_estimator,
         ao_slices: args.ao_slices,
@@ -856,7 +867,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         layers: args.layers,
         precision: args.precision,
         position: args.position_encoding,
-        radiosity_radius: args.radiosity_radius,
+        radiosity_radius: args.radiosity_radius.unwrap_or(vec![base.radiosity.radius]),
         mip_offset: args.mip_offset,
         radiosity_mip_offset: args.radiosity_mip_offset,
         ao_downsample: args.ao_downsample,
@@ -864,21 +875,16 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         dof_samples: args.dof_samples,
         transparency_layers: args.transparency_layers,
         shutter: args.shutter,
-        dz: args.dz,
+        dz: args.dz.unwrap_or(vec![base.dz]),
         layer1: args.layer1,
         scale: args.scale,
+        base,
     };
     let configurations = grid.configurations();
     for k in &configurations {
         k.validate(w, h)?;
     }
     let environment = args.environment.as_deref().map(Environment::load_exr).transpose()?;
-    let (scene, camera) = scene_and_camera(
-        &args.scene,
-        args.camera.as_deref(),
-        fit(args.fit, args.size),
-        &args.limits,
-    )?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Error::Io { path: args.out.clone(), source: e })?;
     let gpu = open_gpu(adapter)?;

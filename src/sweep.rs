@@ -81,12 +81,16 @@ pub struct Knobs {
     /// Resolution scale: the frame is rendered at this fraction of the truth's size and its
     /// outputs are compared at the truth's pixels (nearest).
     pub scale: f32,
+    /// The settings the knobs are set in ([`Grid::base`]).
+    #[serde(skip)]
+    pub base: Settings,
 }
 
 impl Knobs {
     /// The renderer settings of this configuration for a `width` x `height` image (the size
-    /// [`Knobs::size`] gives).
+    /// [`Knobs::size`] gives): the knobs, set in [`Knobs::base`].
     pub fn settings(&self, width: u32, height: u32) -> Settings {
+        let base = &self.base;
         Settings {
             layers: self.layers,
             precision: self.precision,
@@ -100,26 +104,28 @@ impl Knobs {
                 two_layers: self.layers == 2,
                 mip_offset: self.mip_offset,
                 downsample: self.ao_downsample,
-                ..AoSettings::default()
+                ..base.ao.clone()
             },
-            dof: DofSettings { samples: self.dof_samples, ..DofSettings::default() },
+            dof: DofSettings { samples: self.dof_samples, ..base.dof.clone() },
             transparency: TransparencySettings {
                 layers: self.transparency_layers,
-                ..TransparencySettings::default()
+                ..base.transparency.clone()
             },
             motion_blur: MotionBlurSettings {
                 shutter: self.shutter,
-                ..MotionBlurSettings::default()
+                ..base.motion_blur.clone()
             },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
                 downsample: self.radiosity_downsample,
-                ..RadiositySettings::default()
+                ..base.radiosity.clone()
             },
             timings: true,
-            ..Settings::with_size(width, height)
+            width,
+            height,
+            ..base.clone()
         }
     }
 
@@ -188,6 +194,11 @@ pub struct Grid {
     pub layer1: Vec<Layer1Variant>,
     /// Resolution scales.
     pub scale: Vec<f32>,
+    /// The settings every configuration starts from (what no knob sets, and the default of
+    /// every knob left out): [`Settings::default`], whose lengths the command line scales to the
+    /// scene ([`Settings::scaled`]), as `render` and `truth` do. Its obscurance radius and
+    /// falloff define the obscurance the truth traces.
+    pub base: Settings,
 }
 
 impl Default for Grid {
@@ -212,6 +223,7 @@ impl Default for Grid {
             dz: vec![settings.dz],
             layer1: vec![settings.layer1],
             scale: vec![1.0],
+            base: settings,
         }
     }
 }
@@ -232,7 +244,7 @@ impl Grid {
                 })
                 .collect()
         }
-        let settings = Settings::default();
+        let settings = &self.base;
         let base = Knobs {
             ao_estimator: settings.ao.estimator,
             ao_slices: settings.ao.slices,
@@ -252,6 +264,7 @@ impl Grid {
             dz: settings.dz,
             layer1: settings.layer1,
             scale: 1.0,
+            base: settings.clone(),
         };
         let k = times(vec![base], &self.scale, |k, v| k.scale = v);
         let k = times(k, &self.precision, |k, v| k.precision = v);
@@ -280,7 +293,7 @@ pub const TRUTH_BOUNCES: u32 = 10;
 
 /// The ground truth a sweep compares with.
 pub struct Truth {
-    /// World-space obscurance (the default radius and falloff).
+    /// World-space obscurance (the radius and falloff of [`Grid::base`]).
     pub ao: TruthImage,
     /// Diffuse indirect irradiance, [`TRUTH_BOUNCES`] bounces.
     pub indirect: TruthImage,
@@ -334,7 +347,7 @@ impl Truth {
         } else {
             None
         };
-        let ao = AoSettings::default();
+        let ao = grid.base.ao.clone();
         Ok(Truth {
             ao: tracer.ambient_obscurance(scene, &shot(1), &ao, progress)?,
             indirect: tracer.indirect(scene, &shot(2), bounces, progress)?,
