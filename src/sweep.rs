@@ -111,10 +111,7 @@ impl Knobs {
                 layers: self.transparency_layers,
                 ..base.transparency.clone()
             },
-            motion_blur: MotionBlurSettings {
-                shutter: self.shutter,
-                ..base.motion_blur.clone()
-            },
+            motion_blur: MotionBlurSettings { shutter: self.shutter, ..base.motion_blur.clone() },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
                 radius: self.radiosity_radius,
@@ -197,7 +194,8 @@ pub struct Grid {
     /// The settings every configuration starts from (what no knob sets, and the default of
     /// every knob left out): [`Settings::default`], whose lengths the command line scales to the
     /// scene ([`Settings::scaled`]), as `render` and `truth` do. Its obscurance radius and
-    /// falloff define the obscurance the truth traces.
+    /// falloff define the obscurance the truth traces. The radiosity radius and Δz are knobs:
+    /// their lists are their own (the command line defaults them to this base's values).
     pub base: Settings,
 }
 
@@ -892,5 +890,24 @@ mod tests {
         assert_eq!(key(&c[2]), (0.5, 0, 1, 8, 5));
         assert_eq!(key(&c[31]), (1.0, 2, 2, 8, 9));
         assert!(c.iter().all(|k| k.dz == Settings::default().dz && k.precision == Precision::Full));
+    }
+
+    /// The knobs are set in the grid's base settings: what no knob sets (the obscurance radius,
+    /// bias and thickness, the layer-1 variant's neighbours) comes from it, as the command line's
+    /// scene-scaled defaults.
+    #[test]
+    fn configurations_start_from_the_grid_base() {
+        let base = Settings::default().scaled(512.0);
+        let grid =
+            Grid { ao_samples: vec![8], radiosity_samples: vec![9], base, ..Grid::default() };
+        for k in grid.configurations() {
+            let s = k.settings(64, 48);
+            assert_eq!((s.width, s.height, s.ao.samples, s.radiosity.samples), (64, 48, 8, 9));
+            assert_eq!(s.ao.radius, grid.base.ao.radius);
+            assert_eq!(s.ao.bias, grid.base.ao.bias);
+            assert_eq!(s.reflections, grid.base.reflections);
+            assert_eq!(s.ao.radius, 512.0 * Settings::default().ao.radius);
+            assert!(s.timings);
+        }
     }
 }
