@@ -892,8 +892,8 @@ mod tests {
         assert!(c.iter().all(|k| k.dz == Settings::default().dz && k.precision == Precision::Full));
     }
 
-    /// The knobs are set in the grid's base settings: what no knob sets (the obscurance radius,
-    /// bias and thickness, the layer-1 variant's neighbours) comes from it, as the command line's
+    /// The knobs are set in the grid's base settings: what no knob sets (the obscurance radius
+    /// and bias, the reflections' settings) comes from it, as from the command line's
     /// scene-scaled defaults.
     #[test]
     fn configurations_start_from_the_grid_base() {
