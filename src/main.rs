@@ -82,16 +82,8 @@ struct SweepArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
-    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
-    /// subset; the rest from the scene's camera).
-    #[arg(long)]
-    camera: Option<String>,
-    /// Move the camera along its line of sight until the whole scene is in view (its direction
-    /// and field of view stay; the file's camera keeps its vertical field of view at any
-    /// aspect, so a tight one may cut the scene off).
-    #[arg(long)]
-    fit: bool,
+    #[command(flatten)]
+    view: ViewArgs,
     /// Rays per pixel of the ground truth.
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -184,16 +176,8 @@ struct TruthArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "160x120", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
-    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
-    /// subset; the rest from the scene's camera).
-    #[arg(long)]
-    camera: Option<String>,
-    /// Move the camera along its line of sight until the whole scene is in view (its direction
-    /// and field of view stay; the file's camera keeps its vertical field of view at any
-    /// aspect, so a tight one may cut the scene off).
-    #[arg(long)]
-    fit: bool,
+    #[command(flatten)]
+    view: ViewArgs,
     /// The effect to trace.
     #[arg(long, value_enum, default_value_t = TruthEffect::Ao)]
     effect: TruthEffect,
@@ -458,16 +442,8 @@ struct RenderArgs {
     /// Image size, WxH.
     #[arg(long, default_value = "640x480", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
-    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
-    /// subset; the rest from the scene's camera).
-    #[arg(long)]
-    camera: Option<String>,
-    /// Move the camera along its line of sight until the whole scene is in view (its direction
-    /// and field of view stay; the file's camera keeps its vertical field of view at any
-    /// aspect, so a tight one may cut the scene off).
-    #[arg(long)]
-    fit: bool,
+    #[command(flatten)]
+    view: ViewArgs,
     /// Side of each shadow-map face in texels, 16 to 4096 [default: about one texel per pixel
     /// where the scene fills the view, a power of two from 512 to 4096].
     #[arg(long)]
@@ -655,12 +631,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     for path in [&args.out, &args.exr].into_iter().flatten() {
         output::check_writable(path)?;
     }
-    let (scene, camera) = scene_and_camera(
-        &args.scene,
-        args.camera.as_deref(),
-        fit(args.fit, args.size),
-        &args.limits,
-    )?;
+    let (scene, camera) = args.view.scene_and_camera(&args.scene, args.size, &args.limits)?;
     // The GPU estimate's settings, checked before the truth is traced; the truth's obscurance
     // has their radius.
     let mut settings = scaled_defaults(&scene);
@@ -850,12 +821,7 @@ impl Progress {
 fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     use deep_gbuffer::sweep;
     let (w, h) = args.size;
-    let (scene, camera) = scene_and_camera(
-        &args.scene,
-        args.camera.as_deref(),
-        fit(args.fit, args.size),
-        &args.limits,
-    )?;
+    let (scene, camera) = args.view.scene_and_camera(&args.scene, args.size, &args.limits)?;
     // Every configuration starts from the defaults with their lengths scaled to the scene (the
     // obscurance radius, which the truth is traced with, among them), as `render` takes them.
     let base = scaled_defaults(&scene);
@@ -929,6 +895,35 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     println!("{heading}");
     println!("{} configurations -> {}", rows.len(), args.out.display());
     Ok(())
+}
+
+/// The camera a command looks through: the scene's own, changed by `--camera`, or fitted to
+/// the scene by `--fit`.
+#[derive(clap::Args)]
+struct ViewArgs {
+    /// Camera: eye=x,y,z,target=x,y,z,up=x,y,z,fov=deg,near=d,far=d, and a thin lens:
+    /// aperture=r (lens radius, scene units; 0: pinhole) and focus=d (view depth in focus) (any
+    /// subset; the rest from the scene's camera).
+    #[arg(long)]
+    camera: Option<String>,
+    /// Move the camera along its line of sight until the whole scene is in view (its direction
+    /// and field of view stay; the file's camera keeps its vertical field of view at any
+    /// aspect, so a tight one may cut the scene off).
+    #[arg(long)]
+    fit: bool,
+}
+
+impl ViewArgs {
+    /// Loads `spec` and takes its camera as these arguments ask, for an image of `size`
+    /// ([`scene_and_camera`]).
+    fn scene_and_camera(
+        &self,
+        spec: &str,
+        size: (u32, u32),
+        limits: &LimitArgs,
+    ) -> Result<(Scene, Camera)> {
+        scene_and_camera(spec, self.camera.as_deref(), fit(self.fit, size), limits)
+    }
 }
 
 /// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its camera
@@ -1059,12 +1054,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     for dir in [&args.layers, &args.out_seq].into_iter().flatten() {
         std::fs::create_dir_all(dir).map_err(|e| Error::Io { path: dir.clone(), source: e })?;
     }
-    let (scene, mut camera) = scene_and_camera(
-        &args.scene,
-        args.camera.as_deref(),
-        fit(args.fit, args.size),
-        &args.limits,
-    )?;
+    let (scene, mut camera) = args.view.scene_and_camera(&args.scene, args.size, &args.limits)?;
     let mut settings = scaled_defaults(&scene);
     settings.width = args.size.0;
     settings.height = args.size.1;
