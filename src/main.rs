@@ -914,47 +914,37 @@ struct ViewArgs {
 }
 
 impl ViewArgs {
-    /// Loads `spec` and takes its camera as these arguments ask, for an image of `size`
-    /// ([`scene_and_camera`]).
+    /// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its
+    /// camera with the `--camera` changes applied, fitted to the scene at the aspect of `size`
+    /// with `--fit`.
     fn scene_and_camera(
         &self,
         spec: &str,
-        size: (u32, u32),
+        (w, h): (u32, u32),
         limits: &LimitArgs,
     ) -> Result<(Scene, Camera)> {
-        scene_and_camera(spec, self.camera.as_deref(), fit(self.fit, size), limits)
-    }
-}
-
-/// Loads `spec` (warnings printed), adds the default lights if it has none, and takes its camera
-/// with the `--camera` changes applied, fitted to the scene at `aspect` when `fit`.
-fn scene_and_camera(
-    spec: &str,
-    camera: Option<&str>,
-    fit: Option<f32>,
-    limits: &LimitArgs,
-) -> Result<(Scene, Camera)> {
-    let mut scene = Scene::from_spec_with(spec, &limits.limits())?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    if scene.ensure_lights() {
-        eprintln!("note: the scene has no light; it is lit by the default sun and sky");
-    }
-    let mut cam = scene.camera_or_default();
-    if let Some(spec) = camera {
-        let near_given = spec.split(',').any(|t| t.trim().starts_with("near="));
-        apply_camera(&mut cam, spec)?;
-        // A moved camera keeps no near plane that would cut what it now sees.
-        if !near_given && let Projection::Perspective { near, .. } = &mut cam.projection {
-            *near = near.min(scene.near_plane_from(cam.eye));
+        let mut scene = Scene::from_spec_with(spec, &limits.limits())?;
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
         }
+        if scene.ensure_lights() {
+            eprintln!("note: the scene has no light; it is lit by the default sun and sky");
+        }
+        let mut cam = scene.camera_or_default();
+        if let Some(spec) = &self.camera {
+            let near_given = spec.split(',').any(|t| t.trim().starts_with("near="));
+            apply_camera(&mut cam, spec)?;
+            // A moved camera keeps no near plane that would cut what it now sees.
+            if !near_given && let Projection::Perspective { near, .. } = &mut cam.projection {
+                *near = near.min(scene.near_plane_from(cam.eye));
+            }
+        }
+        if self.fit {
+            cam = scene.fit_camera(&cam, w as f32 / h.max(1) as f32);
+            cam.validate()?;
+        }
+        Ok((scene, cam))
     }
-    if let Some(aspect) = fit {
-        cam = scene.fit_camera(&cam, aspect);
-        cam.validate()?;
-    }
-    Ok((scene, cam))
 }
 
 /// The default settings with their lengths scaled to `scene`'s size
@@ -970,11 +960,6 @@ fn scaled_defaults(scene: &Scene) -> Settings {
         );
     }
     settings
-}
-
-/// The aspect `--fit` frames for, when given.
-fn fit(fit: bool, (w, h): (u32, u32)) -> Option<f32> {
-    fit.then(|| w as f32 / h.max(1) as f32)
 }
 
 fn open_gpu(cli_adapter: &Option<String>) -> Result<Gpu> {

@@ -312,7 +312,7 @@ fn a_radius_under_a_pixel_leaves_its_effect_out() {
 /// Each pass's bytes: every storage buffer it binds, once, at its size. The direct pass of the
 /// Cornell box (radiosity on, so both layers and their Lambertian parts) writes exactly four
 /// images of `vec4<f32>`, and reads at least both G-buffer layers; every pass that ran has its
-/// bytes; the device's bandwidth is measured and turns them into a floor below the pass's time.
+/// bytes; the device's bandwidth probe measures positive, finite rates.
 #[test]
 fn passes_report_the_bytes_they_bind() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
@@ -338,6 +338,4 @@ fn passes_report_the_bytes_they_bind() {
         .expect("the test device has timestamps");
     assert!(bandwidth.read_bytes_per_s > 1e8 && bandwidth.read_bytes_per_s.is_finite());
     assert!(bandwidth.write_bytes_per_s > 1e8 && bandwidth.write_bytes_per_s.is_finite());
-    let floor = bandwidth.floor_ms(direct.read_bytes, direct.written_bytes);
-    assert!(floor > 0.0 && floor.is_finite());
 }

@@ -274,23 +274,22 @@ fn a_mirror_shows_a_metal_wall_lit_towards_the_mirror() {
             * radiance
             * n.dot(to_light)
     };
-    let (mut checked, mut agree, mut apart) = (0, 0, 0);
+    let (mut checked, mut apart) = (0, 0);
     for ray in mirrored_rays(&r, &camera, wall).into_iter().filter(|ray| ray.hits) {
         let towards_mirror = lit(-ray.m);
         let towards_camera = lit((camera.eye - ray.q).normalize());
         let off = |e: Vec3, by: Vec3, within: f32| (e - by).abs().max_element() > within;
         checked += 1;
-        let tolerance = 0.02 * towards_mirror.max_element() + 1e-4;
-        agree += usize::from(!off(refl[ray.p].truncate(), towards_mirror, tolerance));
+        // The same BRDF in f32 on both sides, differently rounded (up to 6e-5 of the value
+        // measured); the wall is lit whole, so the shadow lookup adds nothing.
+        let tolerance = 1e-3 * towards_mirror.max_element();
+        let a = refl[ray.p].truncate();
+        assert!(!off(a, towards_mirror, tolerance), "pixel {}: {a} vs {towards_mirror}", ray.p);
         apart +=
             usize::from(off(towards_camera, towards_mirror, 0.1 * towards_mirror.max_element()));
     }
     assert!(checked > 50, "enough mirror pixels see the wall ({checked})");
     assert!(apart * 2 > checked, "the camera sees the wall differently ({apart} of {checked})");
-    assert!(
-        agree as f64 >= 0.97 * checked as f64,
-        "{agree} of {checked} mirror pixels show the wall lit towards the mirror"
-    );
 }
 
 /// A convex mirror cannot see itself: every ray it reflects leaves it, so the march must find

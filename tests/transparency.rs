@@ -223,15 +223,15 @@ fn masked_surfaces_are_holes_where_their_opacity_is_under_the_cutoff() {
         cpu::raster_layer1(&r.frame, &input, &cpu0, false),
         "layer 1 against the CPU's"
     );
-    // At a third of the size the quad's triangles are small enough for the rasterizer's
-    // one-thread path (at most 16 pixels across): the same holes there.
-    let mut small = settings(w / 3, h / 3, 4);
-    small.layers = 2;
-    let rs = render(&scene, &camera(), small);
-    assert_eq!(rs.vis0, cpu::raster_layer0(&rs.frame, &input), "small triangles, layer 0");
+    // At this size the quad's triangles take the rasterizer's one-thread path (at most 16
+    // pixels across); at three times it they are binned, and the tiles' loop cuts the holes.
+    let mut large = settings(3 * w, 3 * h, 4);
+    large.layers = 2;
+    let rl = render(&scene, &camera(), large);
+    assert_eq!(rl.vis0, cpu::raster_layer0(&rl.frame, &input), "binned triangles, layer 0");
     let quad_ids = |vis: &[u64]| vis.iter().filter(|&&v| v != u64::MAX && (v as u32) >= 2).count();
-    assert!(quad_ids(&rs.vis0) > 4, "the small quad is drawn");
     let on_quad = quad_ids(&r.vis0);
+    assert!(quad_ids(&rl.vis0) > 8 * on_quad, "the large quad covers 9 times the pixels");
     // The quad spans about 2 / (2 * 3 * tan 20) of the height: some 29% of 48 x 32 in a square.
     let square = {
         let side = 2.0 / (2.0 * 3.0 * 20f32.to_radians().tan()) * h as f32;

@@ -618,8 +618,9 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     // Two loops, so that only the triangles that need the alpha test run the one that holds it.
     if ALPHA_TEST && draw_kind(b.triangle) == DRAW_TESTED {
         for (var tile = slice; tile < tile_count; tile += b.slices) {
-            let pixel = s.lo + tile_origin(tile, tiles) + vec2<i32>(lid.xy);
-            let d = large_depth(s, tl, tiles, tile, pixel);
+            let tile_lo = s.lo + tile_origin(tile, tiles);
+            let pixel = tile_lo + vec2<i32>(lid.xy);
+            let d = large_depth(s, tl, tile_lo, pixel);
             if d != -1.0 {
                 fragment_tested(pixel, d, b.triangle);
             }
@@ -627,8 +628,9 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
         return;
     }
     for (var tile = slice; tile < tile_count; tile += b.slices) {
-        let pixel = s.lo + tile_origin(tile, tiles) + vec2<i32>(lid.xy);
-        let d = large_depth(s, tl, tiles, tile, pixel);
+        let tile_lo = s.lo + tile_origin(tile, tiles);
+        let pixel = tile_lo + vec2<i32>(lid.xy);
+        let d = large_depth(s, tl, tile_lo, pixel);
         if d != -1.0 {
             fragment(pixel, d, b.triangle);
         }
@@ -640,10 +642,10 @@ fn tile_origin(tile: u32, tiles: vec2<i32>) -> vec2<i32> {
     return vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16;
 }
 
-// The depth of binned triangle s (top-left edges tl) at `pixel` of tile `tile`, or -1 where the
-// tile lies wholly outside an edge, the pixel outside the bounds, or its centre uncovered.
-fn large_depth(s: Setup, tl: vec3<bool>, tiles: vec2<i32>, tile: u32, pixel: vec2<i32>) -> f32 {
-    let tile_lo = s.lo + tile_origin(tile, tiles);
+// The depth of binned triangle s (top-left edges tl) at `pixel` of the tile whose first pixel
+// is `tile_lo`, or -1 where the tile lies wholly outside an edge, the pixel outside the bounds,
+// or its centre uncovered.
+fn large_depth(s: Setup, tl: vec3<bool>, tile_lo: vec2<i32>, pixel: vec2<i32>) -> f32 {
     if tile_outside(s, tile_lo, min(tile_lo + 15, s.hi)) || !all(pixel <= s.hi) {
         return -1.0;
     }

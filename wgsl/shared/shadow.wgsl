@@ -66,17 +66,17 @@ fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>, pc
     let bias = texel * (SHADOW_BIAS_TEXELS + SHADOW_SLOPE_TEXELS * min(tan_theta, 10.0));
     let center = vec2<i32>(floor(uv));
     let k = i32(pcf);
-    var lit = 0.0;
+    var passed = 0.0;
     for (var dy = -k; dy <= k; dy++) {
         for (var dx = -k; dx <= k; dx++) {
             let t = clamp(center + vec2<i32>(dx, dy), vec2<i32>(0), vec2<i32>(i32(f.resolution) - 1));
             let word = atlas[f.offset + u32(t.y) * f.resolution + u32(t.x)];
             if word.y == 0xffffffffu || depth <= bitcast<f32>(word.y) + bias {
-                lit += 1.0;
+                passed += 1.0;
             }
         }
     }
     let side = f32(2 * k + 1);
-    return lit / (side * side);
+    return passed / (side * side);
 }
 #endif
