@@ -32,16 +32,6 @@ fn arc_f(t: f32, gamma: f32) -> f32 {
     -0.25 * (2.0 * t - gamma).cos() + 0.5 * t * gamma.sin()
 }
 
-/// As `arc_weight`: the weight of the arc from gamma - pi/2 to theta.
-fn arc_weight(theta: f32, gamma: f32) -> f32 {
-    let start = arc_f(gamma - 0.5 * PI, gamma);
-    if theta <= 0.0 {
-        start - arc_f(theta, gamma)
-    } else {
-        start + arc_f(theta, gamma) - 2.0 * arc_f(0.0, gamma)
-    }
-}
-
 /// As `segment_distance`.
 fn segment_distance(c: Vec3, y: Vec3, back: Vec3, endless: bool) -> f32 {
     let d = back - y;
@@ -76,6 +66,11 @@ pub struct Slice {
     /// |n_p| W_total: the slice's share of the integral (0 when degenerate).
     pub weight: f32,
     offset: f32,
+    sin_gamma: f32,
+    cos_gamma: f32,
+    /// W(theta) = w_neg - arc_f(theta) for theta <= 0, w_pos + arc_f(theta) above.
+    w_neg: f32,
+    w_pos: f32,
 }
 
 impl Slice {
@@ -97,9 +92,12 @@ impl Slice {
         let np = n - plane * n.dot(plane);
         let np_len = np.length();
         let gamma = np.dot(axis).atan2(np.dot(v)).clamp(-0.5 * PI, 0.5 * PI);
-        let total = arc_weight(gamma + 0.5 * PI, gamma);
+        let (sin_gamma, cos_gamma) = (gamma.sin(), gamma.cos());
+        let w_neg = arc_f(gamma - 0.5 * PI, gamma);
+        let w_pos = w_neg + 0.5 * cos_gamma;
+        let total = w_pos + arc_f(gamma + 0.5 * PI, gamma);
         let weight = if np_len > 1e-6 { np_len * total } else { 0.0 };
-        Slice { dir, v, gamma, total, weight, offset: noise.2 }
+        Slice { dir, v, gamma, total, weight, offset: noise.2, sin_gamma, cos_gamma, w_neg, w_pos }
     }
 
     /// As `slice_spacing`: the spacing (pixels) of `steps` steps on `side` (+-1) of the slice
@@ -131,20 +129,28 @@ impl Slice {
         (inside && (tx as u32, ty as u32) != (x, y)).then_some((tx as u32, ty as u32))
     }
 
-    /// As `angle_in`.
-    fn angle(&self, d: Vec3, side: f32) -> f32 {
-        side * (d.dot(self.v) / d.length().max(1e-30)).clamp(-1.0, 1.0).acos()
+    /// As `weight_in`: the weight W of direction `d` from a tap on `side` (+-1), 0 before the
+    /// arc and W_total past it.
+    fn weight(&self, d: Vec3, side: f32) -> f32 {
+        let c = (d.dot(self.v) / d.length().max(1e-30)).clamp(-1.0, 1.0);
+        let theta = side * c.acos();
+        if theta <= self.gamma - 0.5 * PI {
+            return 0.0;
+        }
+        if theta >= self.gamma + 0.5 * PI {
+            return self.total;
+        }
+        let s = side * (1.0 - c * c).max(0.0).sqrt();
+        let f = -0.25 * ((2.0 * c * c - 1.0) * self.cos_gamma + 2.0 * s * c * self.sin_gamma)
+            + 0.5 * theta * self.sin_gamma;
+        if theta <= 0.0 { self.w_neg - f } else { self.w_pos + f }
     }
 
-    /// As `sector_bits`.
-    fn bits(&self, theta0: f32, theta1: f32) -> u32 {
-        let (a, b) = (self.gamma - 0.5 * PI, self.gamma + 0.5 * PI);
-        let lo = theta0.min(theta1).clamp(a, b);
-        let hi = theta0.max(theta1).clamp(a, b);
+    /// As `sector_bits`: the sectors whose centres lie between the weights `w0` and `w1`.
+    fn bits(&self, w0: f32, w1: f32) -> u32 {
         let scale = SECTORS as f32 / self.total;
-        let first = (arc_weight(lo, self.gamma) * scale - self.offset).ceil() as i32;
-        let last = ((arc_weight(hi, self.gamma) * scale - self.offset).floor() as i32)
-            .min(SECTORS as i32 - 1);
+        let first = (w0.min(w1) * scale - self.offset).ceil() as i32;
+        let last = ((w0.max(w1) * scale - self.offset).floor() as i32).min(SECTORS as i32 - 1);
         let first = first.max(0);
         if last < first {
             return 0;
@@ -179,8 +185,13 @@ impl Slice {
         if nearest.is_nan() || nearest >= radius || height.is_nan() || height <= 0.0 {
             return (0, front2);
         }
-        let theta0 = self.angle(y - c, side);
-        let theta1 = if endless { PI * side } else { self.angle(far - c, side) };
-        (self.bits(theta0, theta1), front2)
+        let w0 = self.weight(y - c, side);
+        // Without end: towards theta = +-pi, past the arc's end on the tap's side.
+        let w1 = match (endless, side > 0.0) {
+            (false, _) => self.weight(far - c, side),
+            (true, true) => self.total,
+            (true, false) => 0.0,
+        };
+        (self.bits(w0, w1), front2)
     }
 }

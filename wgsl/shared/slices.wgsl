@@ -28,6 +28,12 @@ struct Slice {
     total: f32,
     weight: f32,
     offset: f32,
+    // sin and cos of gamma; W(theta) = w_neg - F(theta) for theta <= 0, w_pos + F(theta) above
+    // (F: arc_f), so that a direction's weight costs no trigonometry past its angle.
+    sin_gamma: f32,
+    cos_gamma: f32,
+    w_neg: f32,
+    w_pos: f32,
 }
 
 // A pixel's turn of the slices, jitter of the steps and offset of the sectors, moved on by
@@ -68,15 +74,6 @@ fn arc_f(t: f32, gamma: f32) -> f32 {
     return -0.25 * cos(2.0 * t - gamma) + 0.5 * t * sin(gamma);
 }
 
-// W(theta): the weight integral of cos(t - gamma) |sin t| from the arc's start gamma - pi/2.
-fn arc_weight(theta: f32, gamma: f32) -> f32 {
-    let start = arc_f(gamma - 0.5 * SLICE_PI, gamma);
-    if theta <= 0.0 {
-        return start - arc_f(theta, gamma);
-    }
-    return start + arc_f(theta, gamma) - 2.0 * arc_f(0.0, gamma);
-}
-
 // Slice k of `count` at the view-space point c (normal n) with the pixel's noise.
 fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> Slice {
     var sl: Slice;
@@ -90,26 +87,40 @@ fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) ->
     let np = n - plane * dot(n, plane);
     let np_len = length(np);
     sl.gamma = clamp(atan2(dot(np, axis), dot(np, sl.v)), -0.5 * SLICE_PI, 0.5 * SLICE_PI);
-    sl.total = arc_weight(sl.gamma + 0.5 * SLICE_PI, sl.gamma);
+    sl.sin_gamma = sin(sl.gamma);
+    sl.cos_gamma = cos(sl.gamma);
+    sl.w_neg = arc_f(sl.gamma - 0.5 * SLICE_PI, sl.gamma);
+    sl.w_pos = sl.w_neg + 0.5 * sl.cos_gamma;
+    sl.total = sl.w_pos + arc_f(sl.gamma + 0.5 * SLICE_PI, sl.gamma);
     sl.weight = select(0.0, np_len * sl.total, np_len > 1e-6);
     sl.offset = noise.z;
     return sl;
 }
 
-// The slice angle of direction d from a tap on the slice's `side` (+-1): d turned about V into
-// the slice, on that side (its angle from V kept, as a tap just off the slice's line should
-// count; a projection could carry a point below the tangent plane into the hemisphere).
-fn angle_in(sl: Slice, d: vec3<f32>, side: f32) -> f32 {
-    return side * acos(clamp(dot(d, sl.v) / max(length(d), 1e-30), -1.0, 1.0));
+// The weight W (from the arc's start) of direction d from a tap on the slice's `side` (+-1): d
+// turned about V into the slice, on that side (its angle theta from V kept, as a tap just off the
+// slice's line should count; a projection could carry a point below the tangent plane into the
+// hemisphere). 0 before the arc, W_total past it. With c = cos theta and s = sin theta,
+// cos(2 theta - gamma) = (2c^2 - 1) cos gamma + 2 s c sin gamma: one acos per direction.
+fn weight_in(sl: Slice, d: vec3<f32>, side: f32) -> f32 {
+    let c = clamp(dot(d, sl.v) / max(length(d), 1e-30), -1.0, 1.0);
+    let theta = side * acos(c);
+    if theta <= sl.gamma - 0.5 * SLICE_PI {
+        return 0.0;
+    }
+    if theta >= sl.gamma + 0.5 * SLICE_PI {
+        return sl.total;
+    }
+    let s = side * sqrt(max(1.0 - c * c, 0.0));
+    let f = -0.25 * ((2.0 * c * c - 1.0) * sl.cos_gamma + 2.0 * s * c * sl.sin_gamma) + 0.5 * theta * sl.sin_gamma;
+    return select(sl.w_pos + f, sl.w_neg - f, theta <= 0.0);
 }
 
-// The sectors whose centres lie in the arc between directions theta0 and theta1.
-fn sector_bits(sl: Slice, theta0: f32, theta1: f32) -> u32 {
-    let lo = clamp(min(theta0, theta1), sl.gamma - 0.5 * SLICE_PI, sl.gamma + 0.5 * SLICE_PI);
-    let hi = clamp(max(theta0, theta1), sl.gamma - 0.5 * SLICE_PI, sl.gamma + 0.5 * SLICE_PI);
+// The sectors whose centres lie in the arc between the directions of weights w0 and w1.
+fn sector_bits(sl: Slice, w0: f32, w1: f32) -> u32 {
     let scale = f32(SECTORS) / sl.total;
-    let first = i32(ceil(arc_weight(lo, sl.gamma) * scale - sl.offset));
-    let last = min(i32(floor(arc_weight(hi, sl.gamma) * scale - sl.offset)), i32(SECTORS) - 1);
+    let first = i32(ceil(min(w0, w1) * scale - sl.offset));
+    let last = min(i32(floor(max(w0, w1) * scale - sl.offset)), i32(SECTORS) - 1);
     let a = max(first, 0);
     if last < a {
         return 0u;
@@ -164,10 +175,11 @@ fn solid_sectors(sl: Slice, c: vec3<f32>, n: vec3<f32>, at: vec2<f32>, side: f32
     if !(nearest < radius) || !(dot(y - c, n) > 0.0) {
         return 0u;
     }
-    let theta0 = angle_in(sl, y - c, side);
-    var theta1 = angle_in(sl, far - c, side);
-    if endless {
-        theta1 = SLICE_PI * side;
+    let w0 = weight_in(sl, y - c, side);
+    // Without end: towards theta = +-pi, past the arc's end on the tap's side.
+    var w1 = select(0.0, sl.total, side > 0.0);
+    if !endless {
+        w1 = weight_in(sl, far - c, side);
     }
-    return sector_bits(sl, theta0, theta1);
+    return sector_bits(sl, w0, w1);
 }
