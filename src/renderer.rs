@@ -52,8 +52,9 @@ pub struct Diagnostics {
     pub rejected_materials: u32,
     /// Triangles rejected because a vertex position is NaN or infinite.
     pub rejected_positions: u32,
-    /// Triangles drawn with their base colour alone because their material's texture does not
-    /// lie inside the texel buffer (or has a zero size).
+    /// Triangles drawn with their material's factors alone because a texture of it does not
+    /// lie inside the texel buffer (or has a zero size), or because the scene is marked
+    /// [`textureless`](crate::SceneInfo::textureless).
     pub untextured_triangles: u32,
     /// Blended fragments in front of the opaque surfaces that lie behind the last transparency
     /// peel ([`TransparencySettings::layers`](crate::TransparencySettings)): left out of the
@@ -93,7 +94,8 @@ impl Diagnostics {
             ),
             (
                 self.untextured_triangles,
-                "triangles' textures lie outside the texel buffer (drawn untextured)",
+                "triangles' textures lie outside the texel buffer or the scene is marked \
+                 textureless (drawn untextured)",
             ),
             (
                 self.unpeeled_fragments,

@@ -87,6 +87,7 @@ fn host_frame_with_deep_gbuffer_as_one_stage() {
         emissive: false,
         blended: false,
         masked: false,
+        textureless: true,
         bounds: Some((Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
     };
     let scene = SceneBuffers::import(&device, buffers, info).unwrap();
@@ -236,7 +237,8 @@ fn composite_into_the_hosts_storage_texture() {
 
 /// The host's buffers as the CPU never sees them: bad indices, a bad material id, a NaN
 /// position and a texture past the texel buffer. Each bad triangle is rejected on the GPU (the
-/// image is bit for bit that of the good triangles alone) and counted once a frame.
+/// image is bit for bit that of the good triangles alone) and counted once a frame. A texture
+/// that fits, in a scene marked textureless, is left out and counted the same way.
 #[test]
 fn bad_imported_triangles_are_rejected_and_counted() {
     let (device, queue) = host_device();
@@ -263,7 +265,7 @@ fn bad_imported_triangles_are_rejected_and_counted() {
         m
     };
     let textured = deep_gbuffer::scene::upload::slot_flag(SLOT_BASE_COLOR);
-    let import = |triangles: &[([u32; 3], u32)], materials: &[GpuMaterial]| {
+    let import = |triangles: &[([u32; 3], u32)], materials: &[GpuMaterial], textureless: bool| {
         let indices: Vec<u32> = triangles.iter().flat_map(|(t, _)| *t).collect();
         let ids: Vec<u32> = triangles.iter().map(|(_, m)| *m).collect();
         let buffers = ImportedBuffers {
@@ -273,8 +275,8 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             indices: storage(&device, "host.indices", bytemuck::cast_slice(&indices)),
             triangle_materials: storage(&device, "host.ids", bytemuck::cast_slice(&ids)),
             materials: storage(&device, "host.materials", bytemuck::cast_slice(materials)),
-            // Four texels: a 2x2 texture fits at offset 0 and not at offset 3.
-            texels: storage(&device, "host.texels", &[255u8; 16]),
+            // Four grey texels: a 2x2 texture fits at offset 0 and not at offset 3.
+            texels: storage(&device, "host.texels", &[128, 128, 128, 255].repeat(4)),
             uvs1: None,
             tangents: None,
             vertex_count: 8,
@@ -294,6 +296,7 @@ fn bad_imported_triangles_are_rejected_and_counted() {
             emissive: false,
             blended: false,
             masked: false,
+            textureless,
             bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
         };
         SceneBuffers::import(&device, buffers, info).unwrap()
@@ -311,8 +314,8 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     ];
     // The bad scene's material 1 names a texture past the texels; it is drawn untextured,
     // exactly as the good scene's untextured material 1.
-    let reference = import(&good, &[material(0.5, 0, 0), material(0.8, 0, 0)]);
-    let scene = import(&bad, &[material(0.5, 0, 0), material(0.8, textured, 3)]);
+    let reference = import(&good, &[material(0.5, 0, 0), material(0.8, 0, 0)], false);
+    let scene = import(&bad, &[material(0.5, 0, 0), material(0.8, textured, 3)], false);
 
     let (w, h) = (40u32, 24u32);
     let camera =
@@ -349,6 +352,21 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     let lit = expected.iter().filter(|p| p.x > 0.3).count();
     assert!(lit > 200, "the quad and the triangle are in view ({lit} pixels)");
     for (i, (a, b)) in image.iter().zip(&expected).enumerate() {
+        assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
+    }
+
+    // Material 1's texture fits: sampled, it darkens the triangle; in a scene marked textureless
+    // the triangle has its factors alone, as the reference, and is counted.
+    let named = [material(0.5, 0, 0), material(0.8, textured, 0)];
+    let (sampled, sampled_counts) = frame(&import(&good, &named, false));
+    let (marked, marked_counts) = frame(&import(&good, &named, true));
+    assert!(sampled_counts.iter().all(|d| !d.has_bad_input()), "{sampled_counts:?}");
+    let darker = sampled.iter().zip(&expected).filter(|(a, b)| a.x < 0.9 * b.x).count();
+    assert!(darker > 10, "the grey texture shows on the small triangle ({darker} pixels darker)");
+    for d in &marked_counts {
+        assert_eq!((d.rejected_triangles(), d.untextured_triangles), (0, 1), "{d:?}");
+    }
+    for (i, (a, b)) in marked.iter().zip(&expected).enumerate() {
         assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
     }
 }

@@ -327,6 +327,10 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
 // when every pixel loop held the test).
 override ALPHA_TEST: bool = true;
 
+// Whether the resolve samples textures (not `SceneInfo::textureless`): without, neither does
+// the alpha test, and triangles whose materials name textures are counted as drawn untextured.
+override TEXTURES: bool = true;
+
 // A fragment of a triangle that needs the alpha test: dropped where its opacity is below its
 // material's cutoff.
 fn fragment_tested(pixel: vec2<i32>, d: f32, t: u32) {
@@ -428,7 +432,9 @@ fn draw_kind(t: u32) -> u32 {
     if (flags & MATERIAL_MASK) == 0u {
         return DRAW_ALL;
     }
-    if (slot_bits(flags) & (1u << SLOT_BASE_COLOR)) != 0u {
+    // (A textureless scene's resolve draws a textured material with its factors alone; so
+    // does its alpha test.)
+    if TEXTURES && (slot_bits(flags) & (1u << SLOT_BASE_COLOR)) != 0u {
         return DRAW_TESTED;
     }
     return select(DRAW_NONE, DRAW_ALL, unit(materials[mid].base_color.a) >= materials[mid].alpha_cutoff);
@@ -456,9 +462,9 @@ fn rejection(t: u32) -> u32 {
     return 0u;
 }
 
-// Whether material mid names a texture that does not lie inside the texel buffer (the resolve
-// then leaves that texture out): asked only by a raster that counts diagnostics, and read field
-// by field (a whole material is 288 bytes).
+// Whether material mid names a texture that the resolve leaves out: one that does not lie
+// inside the texel buffer, or any in a scene marked textureless. Asked only by a raster that
+// counts diagnostics, and read field by field (a whole material is 288 bytes).
 fn texture_outside(mid: u32) -> bool {
 #if WRITE_L0
 #if PEEL
@@ -468,6 +474,9 @@ fn texture_outside(mid: u32) -> bool {
         return false;
     }
     var pending = slot_bits(materials[mid].flags);
+    if !TEXTURES {
+        return pending != 0u;
+    }
     var outside = false;
     while pending != 0u && !outside {
         let k = firstTrailingBit(pending);

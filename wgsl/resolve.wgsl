@@ -89,6 +89,12 @@ fn normal_mapped(n: vec3<f32>, c: vec3<f32>, scale: f32, tri: vec3<u32>, bary: v
     return mapped / ml;
 }
 
+// Whether the scene's materials may sample textures (not `SceneInfo::textureless`): without,
+// the texture code is compiled out. A SIMD driver that runs both sides of every branch runs a
+// loop's body at least once even where no lane enters it: on llvmpipe the sampling code, run
+// for nothing, tripled the resolve of an untextured scene.
+override TEXTURES: bool = true;
+
 fn empty_sample() -> GSample {
     return GSample(0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec2<f32>(0.0), 0.0, 1.0, 0u);
 }
@@ -139,12 +145,11 @@ fn shade(pixel: vec2<u32>) -> GSample {
     var s = empty_sample();
     if mid < frame.material_count {
         // Every texture the material uses, one loop iteration each: one copy of the sampling
-        // code, and none of it runs for a material without textures (a SIMD driver that runs
-        // both sides of a branch still leaves a loop whose lanes are all done).
+        // code. Compiled out of a textureless scene's resolve (TEXTURES).
         var texel_values: array<vec3<f32>, SLOT_COUNT>;
         var read = 0u;
         var pending = slot_bits(materials[mid].flags);
-        while pending != 0u {
+        while TEXTURES && pending != 0u {
             let k = firstTrailingBit(pending);
             pending &= pending - 1u;
             let r = read_slot(mid, k, tri, bary, k == SLOT_BASE_COLOR || k == SLOT_EMISSIVE);

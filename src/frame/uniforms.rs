@@ -520,7 +520,8 @@ pub struct RasterCounters {
     pub rejected_materials: u32,
     /// Triangles rejected for a NaN or infinite position (`DIAG_POSITION`).
     pub rejected_positions: u32,
-    /// Triangles drawn untextured, their texture outside the texel buffer (`DIAG_TEXTURE`).
+    /// Triangles drawn untextured: a texture outside the texel buffer, or any texture in a
+    /// scene marked textureless (`DIAG_TEXTURE`).
     pub untextured: u32,
 }
 

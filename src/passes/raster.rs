@@ -228,9 +228,16 @@ impl Rasterizer {
         ];
         entries.extend(optional.into_iter().filter_map(|(s, b)| Some((s, b?))));
         let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
-        // The alpha test only where the scene has masked materials (wgsl/raster.wgsl).
+        // The alpha test only where the scene has masked materials; a textureless scene's
+        // triangles that name textures counted as drawn untextured (wgsl/raster.wgsl).
         let [small, slices] = self.work.constants();
-        let constants = [small, slices, ("ALPHA_TEST", f64::from(u8::from(scene.info().masked)))];
+        let info = scene.info();
+        let constants = [
+            small,
+            slices,
+            ("ALPHA_TEST", f64::from(u8::from(info.masked))),
+            ("TEXTURES", f64::from(u8::from(!info.textureless))),
+        ];
         let mut defines = Vec::new();
         for &depth_phase in phases {
             defines = mode.defines();

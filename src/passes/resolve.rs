@@ -142,7 +142,9 @@ pub(crate) fn resolve_layer(
     args: Option<&wgpu::Buffer>,
 ) {
     let defines = ctx.settings.precision.defines();
-    let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &[]);
+    // The texture code only where the scene's materials may sample textures (wgsl/resolve.wgsl).
+    let constants = [("TEXTURES", f64::from(u8::from(!ctx.scene.info().textureless)))];
+    let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
     let b = ctx.scene.buffers();
     let entries = [
         (slot::FRAME, ctx.frame),

@@ -31,6 +31,12 @@ pub struct SceneInfo {
     /// fragment runs still costs on some devices), and a masked material with a texture is
     /// drawn whole.
     pub masked: bool,
+    /// No material samples a texture (for imported buffers: no material's flags name a texture
+    /// slot). The resolve is then built without its texture code (code that no pixel runs still
+    /// costs on some devices: on lavapipe it tripled an untextured scene's resolve). A material
+    /// that names a texture in a scene marked textureless is drawn with its factors alone and
+    /// counted in [`Diagnostics::untextured_triangles`](crate::Diagnostics).
+    pub textureless: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -51,6 +57,10 @@ impl SceneInfo {
                 .materials
                 .iter()
                 .any(|m| matches!(m.alpha_mode, super::AlphaMode::Mask { .. })),
+            textureless: scene
+                .materials
+                .iter()
+                .all(|m| m.texture_slots().iter().all(Option::is_none)),
             bounds: scene.bounds(),
         }
     }
