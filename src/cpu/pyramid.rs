@@ -54,15 +54,20 @@ pub fn mip_texel(layout: &PyramidLayout, (tx, ty): (u32, u32), level: usize) -> 
     (q, Vec2::new(origin.0 as f32, origin.1 as f32) + 0.5)
 }
 
+/// As `floor_log2`: floor(log2 x) for x >= 1 (0 below), from the exponent bits.
+fn floor_log2(x: f32) -> i32 {
+    ((x.max(1.0).to_bits() >> 23) & 0xff) as i32 - 127
+}
+
 /// As `mip_level`: the level a tap `h` pixels away reads, within [0, coarsest].
 pub fn mip_level(h: f32, mip_offset: u32, coarsest: usize) -> usize {
-    ((h.max(1.0).log2().floor() as i32) - mip_offset as i32).clamp(0, coarsest as i32) as usize
+    (floor_log2(h) - mip_offset as i32).clamp(0, coarsest as i32) as usize
 }
 
 /// As `mip_coarsest`: the coarsest level a march of steps `spacing` pixels apart reads.
 pub fn mip_coarsest(spacing: f32, layout: &PyramidLayout) -> usize {
     let levels = layout.levels.len().min(8) as i32;
-    (spacing.max(1.0).log2().floor() as i32).clamp(0, levels - 1) as usize
+    floor_log2(spacing).clamp(0, levels - 1) as usize
 }
 
 /// The nearer of two depths, 0 (no surface) counting as infinitely far.

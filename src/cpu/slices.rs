@@ -27,11 +27,6 @@ pub fn slice_noise(x: u32, y: u32, frame_turn: u32) -> (f32, f32, f32) {
     (turn, jitter, offset)
 }
 
-/// Antiderivative of cos(t - gamma) sin(t) (`arc_f`).
-fn arc_f(t: f32, gamma: f32) -> f32 {
-    -0.25 * (2.0 * t - gamma).cos() + 0.5 * t * gamma.sin()
-}
-
 /// As `segment_distance`.
 fn segment_distance(c: Vec3, y: Vec3, back: Vec3, endless: bool) -> f32 {
     let d = back - y;
@@ -68,7 +63,8 @@ pub struct Slice {
     offset: f32,
     sin_gamma: f32,
     cos_gamma: f32,
-    /// W(theta) = w_neg - arc_f(theta) for theta <= 0, w_pos + arc_f(theta) above.
+    /// W(theta) = w_neg - F(theta) for theta <= 0, w_pos + F(theta) above (F: the antiderivative
+    /// of cos(t - gamma) sin t, -cos(2t - gamma) / 4 + t sin(gamma) / 2).
     w_neg: f32,
     w_pos: f32,
 }
@@ -93,9 +89,9 @@ impl Slice {
         let np_len = np.length();
         let gamma = np.dot(axis).atan2(np.dot(v)).clamp(-0.5 * PI, 0.5 * PI);
         let (sin_gamma, cos_gamma) = (gamma.sin(), gamma.cos());
-        let w_neg = arc_f(gamma - 0.5 * PI, gamma);
+        let w_neg = 0.25 * cos_gamma + 0.5 * (gamma - 0.5 * PI) * sin_gamma;
         let w_pos = w_neg + 0.5 * cos_gamma;
-        let total = w_pos + arc_f(gamma + 0.5 * PI, gamma);
+        let total = cos_gamma + gamma * sin_gamma;
         let weight = if np_len > 1e-6 { np_len * total } else { 0.0 };
         Slice { dir, v, gamma, total, weight, offset: noise.2, sin_gamma, cos_gamma, w_neg, w_pos }
     }

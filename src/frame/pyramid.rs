@@ -49,7 +49,25 @@ impl PyramidLayout {
 
 /// The size of `level` of a `width` x `height` image's MIP chain: halved (rounding up) `level`
 /// times (`mip_size` in `wgsl/shared/mip.wgsl`; within [`MAX_LEVELS`], the size of
-/// [`PyramidLayout`]'s level).
+/// [`PyramidLayout`]'s level). The shader divides by 2^level and rounds up, which is the same.
 pub fn mip_size(width: u32, height: u32, level: usize) -> (u32, u32) {
     (0..level).fold((width, height), |(w, h), _| (w.div_ceil(2), h.div_ceil(2)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mip_size;
+
+    /// The shader computes a level's size in one step, the frame's size divided by 2^level and
+    /// rounded up: the same as halving it (rounding up) level times.
+    #[test]
+    fn a_levels_size_is_the_frame_divided_by_a_power_of_two_rounded_up() {
+        for width in 1..=300u32 {
+            for level in 0..12usize {
+                let (w, h) = mip_size(width, width * 7 + 3, level);
+                assert_eq!(w, width.div_ceil(1 << level), "{width} at level {level}");
+                assert_eq!(h, (width * 7 + 3).div_ceil(1 << level), "{width} at level {level}");
+            }
+        }
+    }
 }

@@ -4,13 +4,11 @@
 // depth pyramids through it, the radiosity its gather source. Needs shared/frame.wgsl.
 // src/cpu/pyramid.rs is the same on the CPU.
 
-// The size of `level`: the frame's halved (rounding up) `level` times.
+// The size of `level`: the frame's halved (rounding up) `level` times, which is the frame's size
+// divided by 2^level, rounded up (no loop: the taps ask for it at every step).
 fn mip_size(level: u32) -> vec2<u32> {
-    var size = vec2<u32>(frame.width, frame.height);
-    for (var i = 0u; i < level; i++) {
-        size = (size + 1u) / 2u;
-    }
-    return size;
+    let size = vec2<u32>(frame.width, frame.height);
+    return (size + vec2<u32>((1u << level) - 1u)) >> vec2<u32>(level);
 }
 
 // The full-resolution pixel texel t of `level` was taken from (the rotated-grid choices followed
@@ -32,13 +30,19 @@ fn mip_texel(tap: vec2<i32>, level: u32, offset: u32, index: ptr<function, u32>)
     return vec2<f32>(mip_origin(level, t)) + 0.5;
 }
 
+// floor(log2 x) for x >= 1 (1 for anything less, NaN included), exactly: the exponent bits
+// (a log2 instruction may round 2^k - epsilon up to k).
+fn floor_log2(x: f32) -> i32 {
+    return i32((bitcast<u32>(max(x, 1.0)) >> 23u) & 0xffu) - 127;
+}
+
 // The level a tap h pixels away reads: floor(log2 h) - mip_offset, within [0, coarsest].
 fn mip_level(h: f32, mip_offset: u32, coarsest: u32) -> u32 {
-    return u32(clamp(i32(floor(log2(max(h, 1.0)))) - i32(mip_offset), 0, i32(coarsest)));
+    return u32(clamp(floor_log2(h) - i32(mip_offset), 0, i32(coarsest)));
 }
 
 // The coarsest level a march of steps `spacing` pixels apart reads: floor(log2 spacing), within
 // the chain's `levels` (a step never skips texels of the level it reads).
 fn mip_coarsest(spacing: f32, levels: u32) -> u32 {
-    return u32(clamp(i32(floor(log2(max(spacing, 1.0)))), 0, i32(levels) - 1));
+    return u32(clamp(floor_log2(spacing), 0, i32(levels) - 1));
 }

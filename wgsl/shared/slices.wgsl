@@ -28,8 +28,9 @@ struct Slice {
     total: f32,
     weight: f32,
     offset: f32,
-    // sin and cos of gamma; W(theta) = w_neg - F(theta) for theta <= 0, w_pos + F(theta) above
-    // (F: arc_f), so that a direction's weight costs no trigonometry past its angle.
+    // sin and cos of gamma; W(theta) = w_neg - F(theta) for theta <= 0, w_pos + F(theta) above,
+    // F(t) = -cos(2 t - gamma) / 4 + t sin(gamma) / 2 the antiderivative of cos(t - gamma) sin t,
+    // so that a direction's weight costs no trigonometry past its angle.
     sin_gamma: f32,
     cos_gamma: f32,
     w_neg: f32,
@@ -69,11 +70,6 @@ fn slice_spacing(pixel: vec2<u32>, sl: Slice, side: f32, r_px: f32, steps: u32) 
     return min(r_px, screen_exit(frame, vec2<f32>(pixel) + 0.5, sl.dir * side)) / f32(steps);
 }
 
-// Antiderivative of cos(t - gamma) sin(t).
-fn arc_f(t: f32, gamma: f32) -> f32 {
-    return -0.25 * cos(2.0 * t - gamma) + 0.5 * t * sin(gamma);
-}
-
 // Slice k of `count` at the view-space point c (normal n) with the pixel's noise.
 fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> Slice {
     var sl: Slice;
@@ -89,9 +85,12 @@ fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) ->
     sl.gamma = clamp(atan2(dot(np, axis), dot(np, sl.v)), -0.5 * SLICE_PI, 0.5 * SLICE_PI);
     sl.sin_gamma = sin(sl.gamma);
     sl.cos_gamma = cos(sl.gamma);
-    sl.w_neg = arc_f(sl.gamma - 0.5 * SLICE_PI, sl.gamma);
+    // W(theta) = -F(theta) + F(gamma - pi/2) below 0 and F(theta) + F(gamma - pi/2) - 2 F(0)
+    // above, with F(gamma -+ pi/2) = cos(gamma) / 4 + (gamma -+ pi/2) sin(gamma) / 2 and
+    // F(0) = -cos(gamma) / 4; so W_total = W(gamma + pi/2) = cos(gamma) + gamma sin(gamma).
+    sl.w_neg = 0.25 * sl.cos_gamma + 0.5 * (sl.gamma - 0.5 * SLICE_PI) * sl.sin_gamma;
     sl.w_pos = sl.w_neg + 0.5 * sl.cos_gamma;
-    sl.total = sl.w_pos + arc_f(sl.gamma + 0.5 * SLICE_PI, sl.gamma);
+    sl.total = sl.cos_gamma + sl.gamma * sl.sin_gamma;
     sl.weight = select(0.0, np_len * sl.total, np_len > 1e-6);
     sl.offset = noise.z;
     return sl;
