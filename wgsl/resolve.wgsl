@@ -95,6 +95,10 @@ fn normal_mapped(n: vec3<f32>, c: vec3<f32>, scale: f32, tri: vec3<u32>, bary: v
 // for nothing, tripled the resolve of an untextured scene.
 override TEXTURES: bool = true;
 
+// Whether this frame's geometry moved (FRAME_OBJECT_MOTION): without, the reads of the last
+// frame's vertices are compiled out, for the same reason.
+override OBJECT_MOTION: bool = true;
+
 fn empty_sample() -> GSample {
     return GSample(0.0, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec2<f32>(0.0), 0.0, 1.0, 0u);
 }
@@ -207,7 +211,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
     // Motion: where this point was on screen in the previous frame: the same barycentrics on the
     // triangle as it stood then (FRAME_OBJECT_MOTION), or the same world point (still geometry).
     var was = world;
-    if (frame.flags & FRAME_OBJECT_MOTION) != 0u && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
+    if OBJECT_MOTION && (frame.flags & FRAME_OBJECT_MOTION) != 0u && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
         was = previous_vertex(i0) * bary.x + previous_vertex(i1) * bary.y + previous_vertex(i2) * bary.z;
     }
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(was, 1.0));

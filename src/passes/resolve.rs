@@ -142,8 +142,12 @@ pub(crate) fn resolve_layer(
     args: Option<&wgpu::Buffer>,
 ) {
     let defines = ctx.settings.precision.defines();
-    // The texture code only where the scene's materials may sample textures (wgsl/resolve.wgsl).
-    let constants = [("TEXTURES", f64::from(u8::from(!ctx.scene.info().textureless)))];
+    // The texture code only where the scene's materials may sample textures, the last frame's
+    // vertices only where the geometry moved (wgsl/resolve.wgsl).
+    let constants = [
+        ("TEXTURES", f64::from(u8::from(!ctx.scene.info().textureless))),
+        ("OBJECT_MOTION", f64::from(u8::from(ctx.previous_positions.is_some()))),
+    ];
     let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
     let b = ctx.scene.buffers();
     let entries = [
