@@ -143,10 +143,12 @@ pub(crate) fn resolve_layer(
 ) {
     let defines = ctx.settings.precision.defines();
     // The texture code only where the scene's materials may sample textures, the last frame's
-    // vertices only where the geometry moved (wgsl/resolve.wgsl).
+    // vertices only where the geometry moved (wgsl/resolve.wgsl), the position encoding in use
+    // alone (wgsl/shared/position.wgsl).
     let constants = [
         ("TEXTURES", f64::from(u8::from(!ctx.scene.info().textureless))),
         ("OBJECT_MOTION", f64::from(u8::from(ctx.previous_positions.is_some()))),
+        ("POSITION_FLAGS", f64::from(ctx.settings.position.frame_flags())),
     ];
     let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
     let b = ctx.scene.buffers();

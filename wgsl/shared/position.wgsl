@@ -5,12 +5,17 @@
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 
+// The encoding's frame flags (`PositionEncoding::frame_flags`), a pipeline constant rather than
+// the frame's own bits, so that the encodings not in use are compiled out (a SIMD driver that
+// runs both sides of every branch would run all three for every pixel).
+override POSITION_FLAGS: u32 = 0u;
+
 // The view depth d as the frame's encoding holds it.
 fn stored_depth(f: Frame, d: f32) -> f32 {
-    if (f.flags & FRAME_POSITION_VIEW_F16) != 0u {
+    if (POSITION_FLAGS & FRAME_POSITION_VIEW_F16) != 0u {
         return f16_value(f16_bits(min(d, F16_MAX)));
     }
-    if (f.flags & FRAME_POSITION_SCREEN_U16) != 0u {
+    if (POSITION_FLAGS & FRAME_POSITION_SCREEN_U16) != 0u {
         // z/w of the view point at depth d, in 16 bits over [0, 1], and back through the
         // projection: z_clip = P22 (-d) + P32, w_clip = P23 (-d) + P33.
         let c = mat_mul(f.proj, vec4<f32>(0.0, 0.0, -d, 1.0));
