@@ -75,5 +75,6 @@ pub use scene::{
 pub use settings::{
     AoEstimator, AoSettings, AtomicPath, Boost, DofSettings, Effects, Layer1Variant,
     MotionBlurSettings, Normalization, PositionEncoding, Precision, Preset, RadiosityEstimator,
-    RadiositySettings, ReflectionSettings, Settings, ShadowSettings, TransparencySettings,
+    RadiositySettings, RasterWork, ReflectionSettings, Settings, ShadowSettings,
+    TransparencySettings,
 };

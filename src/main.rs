@@ -9,8 +9,8 @@ use deep_gbuffer::scene::{Limits, Projection};
 use deep_gbuffer::{
     AoEstimator, AoSettings, AtomicPath, Boost, Camera, Effect, Effects, Environment, Error,
     Layer1Variant, Normalization, PassId, PositionEncoding, Precision, Preset, RadiosityEstimator,
-    RadiositySettings, Renderer, Result, Scene, SceneBuffers, SceneInfo, Settings, ShadowSettings,
-    output,
+    RadiositySettings, RasterWork, Renderer, Result, Scene, SceneBuffers, SceneInfo, Settings,
+    ShadowSettings, output,
 };
 use glam::Vec3;
 
@@ -481,6 +481,9 @@ struct RenderArgs {
     /// Raster atomics.
     #[arg(long, value_enum, default_value_t = AtomicPath::Auto)]
     atomics: AtomicPath,
+    /// How the rasterizer shares out its work (the same pixels either way).
+    #[arg(long, value_enum, default_value_t = RasterWork::Auto)]
+    raster_work: RasterWork,
     /// Frames to render (the outputs are the last frame's) [default: until the radiosity
     /// settles, when it runs: its mean irradiance changes by less than 0.5% over 4 frames, at
     /// most 64 frames; else 1].
@@ -1049,6 +1052,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     settings.dz = args.dz.unwrap_or(settings.dz);
     settings.layer1 = args.layer1;
     settings.atomics = args.atomics;
+    settings.raster_work = args.raster_work;
     settings.ao.enabled = !args.no_ao;
     settings.radiosity.normalization = args.normalization;
     settings.radiosity.boost = args.boost;

@@ -166,7 +166,7 @@ impl Stages {
     fn new(device: &wgpu::Device, s: &Settings, int64: bool) -> Stages {
         let pixels = u64::from(s.width) * u64::from(s.height);
         Stages {
-            raster: RasterStage::new(device, int64, pixels),
+            raster: RasterStage::new(device, int64, s.raster_work, pixels),
             resolve: ResolveStage::new(device, pixels * gbuffer::bytes_per_pixel(s.precision)),
             ao: None,
             shadows: None,

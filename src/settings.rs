@@ -199,6 +199,24 @@ pub enum AtomicPath {
     Int32,
 }
 
+/// How the rasterizer shares out its work (`wgsl/raster.wgsl`); every choice draws the same
+/// visibility buffers, bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[derive(serde::Serialize)]
+pub enum RasterWork {
+    /// By the device's type: `cpu` for a CPU driver, `gpu` for every other device.
+    #[default]
+    Auto,
+    /// For a GPU, which runs thousands of threads and skips a branch no thread of a wave takes:
+    /// triangles up to 16 pixels across drawn by their own thread, a binned triangle spread at 8
+    /// of its 16x16 tiles a workgroup, and tiles wholly outside it skipped before the exact test.
+    Gpu,
+    /// For a CPU driver, which runs a few threads and every branch: up to 64 pixels by one
+    /// thread, 64 tiles a workgroup, and no tile test (it would cost every pixel and skip none).
+    Cpu,
+}
+
 /// Ambient obscurance (`wgsl/ao.wgsl`, documented there with its exact estimator).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AoSettings {
@@ -706,6 +724,8 @@ pub struct Settings {
     pub position: PositionEncoding,
     /// Atomic path.
     pub atomics: AtomicPath,
+    /// How the rasterizer shares out its work (by the device's type unless set).
+    pub raster_work: RasterWork,
     /// Record GPU timestamps per pass (when the device has `TIMESTAMP_QUERY`).
     pub timings: bool,
     /// Ambient obscurance.
@@ -737,6 +757,7 @@ impl Default for Settings {
             precision: Precision::Full,
             position: PositionEncoding::ViewDepthF32,
             atomics: AtomicPath::Auto,
+            raster_work: RasterWork::Auto,
             timings: true,
             ao: AoSettings::default(),
             shadows: ShadowSettings::default(),

@@ -9,7 +9,7 @@ use deep_gbuffer::cpu::raster::{self as cpu, RasterInput, double_sided_triangles
 use deep_gbuffer::frame::FrameUniform;
 use deep_gbuffer::gbuffer::{VIS_EMPTY, vis_depth, vis_id};
 use deep_gbuffer::scene::{Camera, Projection};
-use deep_gbuffer::{AtomicPath, Layer1Variant, Scene, SceneBuffers, Settings};
+use deep_gbuffer::{AtomicPath, Layer1Variant, RasterWork, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 
@@ -42,19 +42,23 @@ fn mismatches(gpu: &[u64], cpu: &[u64], width: u32) -> (usize, String) {
     (n, report)
 }
 
-/// Both layers of `scene` from `camera`: the GPU's must equal the CPU reference's bit for bit.
+/// Both layers of `scene` from `camera`: the GPU's must equal the CPU reference's bit for bit,
+/// with the work shared out both ways (`RasterWork::Gpu`, whose small-triangle size, slices and
+/// tile test a GPU gets, and `RasterWork::Cpu`, a CPU driver's), whatever the device.
 fn assert_matches_cpu(scene: &Scene, camera: &Camera, settings: Settings) {
     let width = settings.width;
-    let r = render(scene, camera, settings);
     let ds = double_sided_triangles(scene);
     let input = RasterInput::new(scene, &ds);
-    let cpu0 = cpu::raster_layer0(&r.frame, &input);
-    let cpu1 = cpu::raster_layer1(&r.frame, &input, &cpu0, false);
-    let (n0, report0) = mismatches(&r.vis0, &cpu0, width);
-    let (n1, report1) = mismatches(&r.vis1, &cpu1, width);
-    assert!(cpu0.iter().any(|&w| w != VIS_EMPTY), "the view is not empty");
-    assert_eq!(n0, 0, "layer 0 differs from the CPU reference at {n0} pixels:{report0}");
-    assert_eq!(n1, 0, "layer 1 differs from the CPU reference at {n1} pixels:{report1}");
+    for raster_work in [RasterWork::Gpu, RasterWork::Cpu] {
+        let r = render(scene, camera, Settings { raster_work, ..settings.clone() });
+        let cpu0 = cpu::raster_layer0(&r.frame, &input);
+        let cpu1 = cpu::raster_layer1(&r.frame, &input, &cpu0, false);
+        let (n0, report0) = mismatches(&r.vis0, &cpu0, width);
+        let (n1, report1) = mismatches(&r.vis1, &cpu1, width);
+        assert!(cpu0.iter().any(|&w| w != VIS_EMPTY), "the view is not empty");
+        assert_eq!(n0, 0, "{raster_work:?}: layer 0 differs from the CPU at {n0} pixels:{report0}");
+        assert_eq!(n1, 0, "{raster_work:?}: layer 1 differs from the CPU at {n1} pixels:{report1}");
+    }
 }
 
 fn cornell() -> (Scene, Camera) {

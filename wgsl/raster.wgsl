@@ -54,6 +54,10 @@ const SUBPIXEL: i32 = 256;
 override SMALL_EXTENT: i32 = 16;
 // A binned triangle gets one slice (workgroup) per TILES_PER_SLICE tiles of its bounds.
 override TILES_PER_SLICE: u32 = 8u;
+// Whether a binned triangle's threads skip the exact test in tiles wholly outside it: on a GPU
+// a tile's threads take that branch together; a driver that runs both sides of every branch
+// only pays for the test (`RasterWork`). The pixels drawn are the same either way.
+override TILE_TEST: bool = true;
 // A work item whose slot was reserved but not written (its triangle fell back to one slice).
 const NO_ITEM: u32 = 0xffffffffu;
 const MAX_POLY: u32 = 9u;
@@ -655,7 +659,7 @@ fn tile_origin(tile: u32, tiles: vec2<i32>) -> vec2<i32> {
 // is `tile_lo`, or -1 where the tile lies wholly outside an edge, the pixel outside the bounds,
 // or its centre uncovered.
 fn large_depth(s: Setup, tl: vec3<bool>, tile_lo: vec2<i32>, pixel: vec2<i32>) -> f32 {
-    if tile_outside(s, tile_lo, min(tile_lo + 15, s.hi)) || !all(pixel <= s.hi) {
+    if (TILE_TEST && tile_outside(s, tile_lo, min(tile_lo + 15, s.hi))) || !all(pixel <= s.hi) {
         return -1.0;
     }
     let p = pixel * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
