@@ -991,7 +991,7 @@ fn info(adapter: &Option<String>) -> Result<()> {
         "int64" => "int64 (one 64-bit atomicMin per fragment)",
         _ => "int32 (depth pass, then id pass; the device lacks 64-bit atomics)",
     };
-    println!("raster:   {path}");
+    println!("raster:   {path}; work shared out as on a {}", renderer.raster_work().name());
     Ok(())
 }
 
@@ -1019,6 +1019,8 @@ struct TimingsFile<'a> {
     width: u32,
     height: u32,
     raster_path: &'a str,
+    /// How the rasterizer shared out its work (`gpu` or `cpu`).
+    raster_work: &'a str,
     triangles: u32,
     /// Clipped triangles too large for one thread, rasterized by tiles.
     binned_triangles: u32,
@@ -1200,6 +1202,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             width: w,
             height: h,
             raster_path: renderer.raster_path(),
+            raster_work: renderer.raster_work().name(),
             triangles: buffers.triangle_count(),
             binned_triangles: diagnostics.large_triangles,
             total_ms: passes.iter().map(|p| p.ms).sum(),

@@ -29,7 +29,7 @@ use crate::passes::transparency::TransparencyStage;
 use crate::passes::{FrameContext, Recorder, Stage};
 use crate::plan::{Effect, PassId, Plan, StageId};
 use crate::scene::Camera;
-use crate::settings::{AtomicPath, Settings};
+use crate::settings::{AtomicPath, RasterWork, Settings};
 use crate::{Error, Result, SceneBuffers};
 
 /// Counters the GPU keeps while rasterizing, read with [`Renderer::diagnostics`].
@@ -501,6 +501,12 @@ impl Renderer {
     /// `"int64"` (one 64-bit atomicMin per fragment) or `"int32"` (depth pass, then id pass).
     pub fn raster_path(&self) -> &'static str {
         if self.stages.raster.int64() { "int64" } else { "int32" }
+    }
+
+    /// How the rasterizer shares out its work on this device: [`RasterWork::Gpu`] or
+    /// [`RasterWork::Cpu`] (what [`RasterWork::Auto`] chose, or what was asked).
+    pub fn raster_work(&self) -> RasterWork {
+        self.stages.raster.work()
     }
 
     /// Forgets the previous frame (a camera cut): the next frame rasterizes layer 1 exactly.

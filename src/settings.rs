@@ -217,6 +217,17 @@ pub enum RasterWork {
     Cpu,
 }
 
+impl RasterWork {
+    /// Its name, as `--raster-work` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            RasterWork::Auto => "auto",
+            RasterWork::Gpu => "gpu",
+            RasterWork::Cpu => "cpu",
+        }
+    }
+}
+
 /// Ambient obscurance (`wgsl/ao.wgsl`, documented there with its exact estimator).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AoSettings {

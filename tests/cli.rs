@@ -20,7 +20,7 @@ fn out_dir(name: &str) -> std::path::PathBuf {
 fn render_writes_image_layers_and_timings() {
     let dir = out_dir("render");
     let status = cli()
-        .args(["render", "builtin:cornell", "--size", "64x48", "--out"])
+        .args(["render", "builtin:cornell", "--size", "64x48", "--raster-work", "gpu", "--out"])
         .arg(dir.join("cornell.png"))
         .arg("--exr")
         .arg(dir.join("cornell.exr"))
@@ -46,6 +46,8 @@ fn render_writes_image_layers_and_timings() {
     assert_eq!(json["width"], 64);
     assert_eq!(json["height"], 48);
     assert!(json["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    // The raster's work was shared out as asked (by the device's type without the option).
+    assert_eq!(json["raster_work"], "gpu");
     // The load the frame was timed under, where the system reports it (Linux does).
     if cfg!(target_os = "linux") {
         let load = json["load"].as_array().expect("a load average on Linux");

@@ -121,6 +121,8 @@ struct Work {
     tiles_per_slice: u32,
     /// Tiles wholly outside a binned triangle are skipped before the exact per-pixel test.
     tile_test: bool,
+    /// Which of the two it is ([`RasterWork::Gpu`] or [`RasterWork::Cpu`]).
+    kind: RasterWork,
 }
 
 impl Work {
@@ -141,9 +143,9 @@ impl Work {
             RasterWork::Cpu => true,
         };
         if cpu {
-            Work { small_extent: 64, tiles_per_slice: 64, tile_test: false }
+            Work { small_extent: 64, tiles_per_slice: 64, tile_test: false, kind: RasterWork::Cpu }
         } else {
-            Work { small_extent: 16, tiles_per_slice: 8, tile_test: true }
+            Work { small_extent: 16, tiles_per_slice: 8, tile_test: true, kind: RasterWork::Gpu }
         }
     }
 
@@ -347,6 +349,11 @@ impl RasterStage {
     /// Whether this uses the 64-bit atomic path.
     pub(crate) fn int64(&self) -> bool {
         self.rasterizer.int64
+    }
+
+    /// How the work is shared out: [`RasterWork::Gpu`] or [`RasterWork::Cpu`].
+    pub(crate) fn work(&self) -> RasterWork {
+        self.rasterizer.work.kind
     }
 
     /// This frame's layer 0 (the last frame's, between frames).
