@@ -331,10 +331,6 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
 // when every pixel loop held the test).
 override ALPHA_TEST: bool = true;
 
-// Whether the resolve samples textures (not `SceneInfo::textureless`): without, neither does
-// the alpha test, and triangles whose materials name textures are counted as drawn untextured.
-override TEXTURES: bool = true;
-
 // A fragment of a triangle that needs the alpha test: dropped where its opacity is below its
 // material's cutoff.
 fn fragment_tested(pixel: vec2<i32>, d: f32, t: u32) {

@@ -20,8 +20,9 @@
 //   obscurance), its direct light re-evaluated towards the point the ray left (the lights,
 //   past their shadow maps: shared/lit.wgsl). A ray that leaves the screen, the distance or
 //   the iteration budget sees the environment: the equirectangular map (src/environment.rs
-//   gives the mapping) when one is set, else the constant sky. Hits fade out near the screen edges; the confidence (alpha) is
-//   1 for a hit far from the edges, 0 for the environment. Output: reflectivity * colour.
+//   gives the mapping) when one is set, else the constant sky. Hits fade out near the screen
+//   edges; the confidence (alpha) is 1 for a hit far from the edges, 0 for the environment.
+//   Output: reflectivity * colour.
 // src/cpu/reflections.rs is the same on the CPU.
 // defines: PACKED AO RADIOSITY SHADOWS
 

@@ -28,7 +28,7 @@
 // them binds a short buffer, which reads as zero.
 @group(0) @binding(10) var<storage, read> uvs1: array<f32>;
 @group(0) @binding(11) var<storage, read> tangents: array<f32>;
-// Each vertex's position in the last frame (read only with FRAME_OBJECT_MOTION).
+// Each vertex's position in the last frame (read only with OBJECT_MOTION).
 @group(0) @binding(12) var<storage, read> previous_positions: array<f32>;
 
 fn load3(buf: u32, i: u32) -> vec3<f32> {
@@ -89,14 +89,9 @@ fn normal_mapped(n: vec3<f32>, c: vec3<f32>, scale: f32, tri: vec3<u32>, bary: v
     return mapped / ml;
 }
 
-// Whether the scene's materials may sample textures (not `SceneInfo::textureless`): without,
-// the texture code is compiled out. A SIMD driver that runs both sides of every branch runs a
-// loop's body at least once even where no lane enters it: on llvmpipe the sampling code, run
-// for nothing, tripled the resolve of an untextured scene.
-override TEXTURES: bool = true;
-
-// Whether this frame's geometry moved (FRAME_OBJECT_MOTION): without, the reads of the last
-// frame's vertices are compiled out, for the same reason.
+// Whether this frame's geometry moved (the frame's FRAME_OBJECT_MOTION, as a pipeline constant):
+// without, the reads of the last frame's vertices are compiled out (see TEXTURES in
+// shared/texture.wgsl for why).
 override OBJECT_MOTION: bool = true;
 
 fn empty_sample() -> GSample {
@@ -149,7 +144,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
     var s = empty_sample();
     if mid < frame.material_count {
         // Every texture the material uses, one loop iteration each: one copy of the sampling
-        // code. Compiled out of a textureless scene's resolve (TEXTURES).
+        // code. Compiled out of a textureless scene's resolve (TEXTURES, shared/texture.wgsl).
         var texel_values: array<vec3<f32>, SLOT_COUNT>;
         var read = 0u;
         var pending = slot_bits(materials[mid].flags);
@@ -209,9 +204,9 @@ fn shade(pixel: vec2<u32>) -> GSample {
     s.normal = n;
     s.material = mid;
     // Motion: where this point was on screen in the previous frame: the same barycentrics on the
-    // triangle as it stood then (FRAME_OBJECT_MOTION), or the same world point (still geometry).
+    // triangle as it stood then (OBJECT_MOTION), or the same world point (still geometry).
     var was = world;
-    if OBJECT_MOTION && (frame.flags & FRAME_OBJECT_MOTION) != 0u && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
+    if OBJECT_MOTION && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
         was = previous_vertex(i0) * bary.x + previous_vertex(i1) * bary.y + previous_vertex(i2) * bary.z;
     }
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(was, 1.0));

@@ -82,6 +82,12 @@ impl<'a> Recorder<'a> {
     }
 }
 
+/// The pipeline constant `TEXTURES` (`wgsl/shared/texture.wgsl`) for `scene`: texture reads
+/// compiled in unless the scene is marked [`textureless`](crate::SceneInfo::textureless).
+pub(crate) fn textures_constant(scene: &SceneBuffers) -> (&'static str, f64) {
+    ("TEXTURES", f64::from(u8::from(!scene.info().textureless)))
+}
+
 /// What the frame's stages read: the frame's inputs, and the targets the stages before wrote.
 pub(crate) struct FrameContext<'a> {
     pub device: &'a wgpu::Device,

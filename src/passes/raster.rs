@@ -112,56 +112,48 @@ impl<'a> Draw<'a> {
     }
 }
 
-/// How the rasterizer shares out its work ([`RasterWork`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Work {
-    /// Triangles at most this many pixels across are drawn by one thread each.
-    small_extent: u32,
-    /// A binned triangle gets one workgroup per this many of its 16x16 tiles.
-    tiles_per_slice: u32,
-    /// Tiles wholly outside a binned triangle are skipped before the exact per-pixel test.
-    tile_test: bool,
-    /// Which of the two it is ([`RasterWork::Gpu`] or [`RasterWork::Cpu`]).
-    kind: RasterWork,
+/// The rasterizer's pipeline constants for `work` (resolved: [`RasterWork::Gpu`] or
+/// [`RasterWork::Cpu`]): the largest triangle one thread draws, the 16x16 tiles a binned
+/// triangle's workgroup takes, and whether tiles wholly outside the triangle skip the exact test.
+///
+/// A GPU runs thousands of threads at once and starts a workgroup cheaply: small triangles stay
+/// small (16 pixels) and a binned triangle is spread thin (8 tiles a workgroup). A CPU driver
+/// runs a few threads, and each workgroup costs it about as much as drawing a few tiles
+/// (lavapipe, 2 cores, 1920x1080: the Cornell box's layer 0 took 67 ms at 8 tiles a workgroup,
+/// 41 at 64, 48 at 256; the 2CylinderEngine's 415 at (16, 8), 320 at (16, 64), 185 at (64, 64)),
+/// so it gets fewer, larger ones. A GPU skips the exact test of a tile outside the triangle (the
+/// tile's threads all take the branch); a CPU driver runs both sides of every branch, so there
+/// the test only adds its arithmetic to every pixel (lavapipe, Cornell 1920x1080, five
+/// alternated rounds: layer 0 14.2-18.8 ms with it, median 14.8; 11.8-16.2 without, median
+/// 12.3).
+fn work_constants(work: RasterWork) -> [(&'static str, f64); 3] {
+    let (small_extent, tiles_per_slice, tile_test) = match work {
+        RasterWork::Cpu => (64u8, 64u8, false),
+        RasterWork::Gpu | RasterWork::Auto => (16, 8, true),
+    };
+    [
+        ("SMALL_EXTENT", f64::from(small_extent)),
+        ("TILES_PER_SLICE", f64::from(tiles_per_slice)),
+        ("TILE_TEST", f64::from(u8::from(tile_test))),
+    ]
 }
 
-impl Work {
-    /// A GPU runs thousands of threads at once and starts a workgroup cheaply: small triangles
-    /// stay small (16 pixels) and a binned triangle is spread thin (8 tiles a workgroup). A CPU
-    /// driver runs a few threads, and each workgroup costs it about as much as drawing a few
-    /// tiles (lavapipe, 2 cores, 1920x1080: the Cornell box's layer 0 took 67 ms at 8 tiles a
-    /// workgroup, 41 at 64, 48 at 256; the 2CylinderEngine's 415 at (16, 8), 320 at (16, 64),
-    /// 185 at (64, 64)), so it gets fewer, larger ones. A GPU skips the exact test of a tile
-    /// outside the triangle (the tile's threads all take the branch); a CPU driver runs both
-    /// sides of every branch, so there the test only adds its arithmetic to every pixel
-    /// (lavapipe, Cornell 1920x1080, five alternated rounds: layer 0 14.2-18.8 ms with it,
-    /// median 14.8; 11.8-16.2 without, median 12.3).
-    fn new(work: RasterWork, device: &wgpu::Device) -> Work {
-        let cpu = match work {
-            RasterWork::Auto => device.adapter_info().device_type == wgpu::DeviceType::Cpu,
-            RasterWork::Gpu => false,
-            RasterWork::Cpu => true,
-        };
-        if cpu {
-            Work { small_extent: 64, tiles_per_slice: 64, tile_test: false, kind: RasterWork::Cpu }
-        } else {
-            Work { small_extent: 16, tiles_per_slice: 8, tile_test: true, kind: RasterWork::Gpu }
+/// `work` on `device`: [`RasterWork::Auto`] resolved by the device's type.
+fn resolve_work(work: RasterWork, device: &wgpu::Device) -> RasterWork {
+    match work {
+        RasterWork::Auto if device.adapter_info().device_type == wgpu::DeviceType::Cpu => {
+            RasterWork::Cpu
         }
-    }
-
-    fn constants(self) -> [(&'static str, f64); 3] {
-        [
-            ("SMALL_EXTENT", f64::from(self.small_extent)),
-            ("TILES_PER_SLICE", f64::from(self.tiles_per_slice)),
-            ("TILE_TEST", f64::from(u8::from(self.tile_test))),
-        ]
+        RasterWork::Auto => RasterWork::Gpu,
+        asked => asked,
     }
 }
 
 /// The rasterizer: its atomic path, bins, counters and indirect arguments.
 pub(crate) struct Rasterizer {
     int64: bool,
-    work: Work,
+    /// How the work is shared out (resolved: `Gpu` or `Cpu`).
+    work: RasterWork,
     /// The 64-bit path's early depth test (the device loads 64-bit atomics).
     early_test: bool,
     /// Bin counters and diagnostics ([`RasterCounters`]).
@@ -180,7 +172,7 @@ impl Rasterizer {
         let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
         Rasterizer {
             int64,
-            work: Work::new(work, device),
+            work: resolve_work(work, device),
             early_test: int64
                 && device.features().contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
             bins: storage(
@@ -246,14 +238,13 @@ impl Rasterizer {
         let groups = gpu::dispatch_size(scene.triangle_count().div_ceil(64));
         // The alpha test only where the scene has masked materials; a textureless scene's
         // triangles that name textures counted as drawn untextured (wgsl/raster.wgsl).
-        let [small, slices, tile_test] = self.work.constants();
-        let info = scene.info();
+        let [small, slices, tile_test] = work_constants(self.work);
         let constants = [
             small,
             slices,
             tile_test,
-            ("ALPHA_TEST", f64::from(u8::from(info.masked))),
-            ("TEXTURES", f64::from(u8::from(!info.textureless))),
+            ("ALPHA_TEST", f64::from(u8::from(scene.info().masked))),
+            super::textures_constant(scene),
         ];
         let mut defines = Vec::new();
         for &depth_phase in phases {
@@ -353,7 +344,7 @@ impl RasterStage {
 
     /// How the work is shared out: [`RasterWork::Gpu`] or [`RasterWork::Cpu`].
     pub(crate) fn work(&self) -> RasterWork {
-        self.rasterizer.work.kind
+        self.rasterizer.work
     }
 
     /// This frame's layer 0 (the last frame's, between frames).

@@ -146,7 +146,7 @@ pub(crate) fn resolve_layer(
     // vertices only where the geometry moved (wgsl/resolve.wgsl), the position encoding in use
     // alone (wgsl/shared/position.wgsl).
     let constants = [
-        ("TEXTURES", f64::from(u8::from(!ctx.scene.info().textureless))),
+        super::textures_constant(ctx.scene),
         ("OBJECT_MOTION", f64::from(u8::from(ctx.previous_positions.is_some()))),
         ("POSITION_FLAGS", f64::from(ctx.settings.position.frame_flags())),
     ];

@@ -105,8 +105,15 @@ impl Stage for TransparencyStage {
         let mut entries = self.entries(ctx);
         match id {
             PassId::TransparencyPeel => {
-                let accumulate =
-                    ctx.pipelines.get(ctx.device, "transparency", "accumulate", &defines, &[]);
+                // The opacity reads textures only where the scene may have them.
+                let textures = [super::textures_constant(ctx.scene)];
+                let accumulate = ctx.pipelines.get(
+                    ctx.device,
+                    "transparency",
+                    "accumulate",
+                    &defines,
+                    &textures,
+                );
                 // Peel k writes peels[k % 2] against the other (the previous peel).
                 let step = |k: usize, mode| Draw {
                     vis1: Some(&self.peels[k % 2]),

@@ -32,10 +32,11 @@ pub struct SceneInfo {
     /// drawn whole.
     pub masked: bool,
     /// No material samples a texture (for imported buffers: no material's flags name a texture
-    /// slot). The resolve is then built without its texture code (code that no pixel runs still
-    /// costs on some devices: on lavapipe it tripled an untextured scene's resolve). A material
-    /// that names a texture in a scene marked textureless is drawn with its factors alone and
-    /// counted in [`Diagnostics::untextured_triangles`](crate::Diagnostics).
+    /// slot). The kernels that read textures (the resolve, the alpha test, the transparency's
+    /// opacity) are then built without those reads (code that no pixel runs still costs on some
+    /// devices: on lavapipe it tripled an untextured scene's resolve). A material that names a
+    /// texture in a scene marked textureless is drawn with its factors alone and counted in
+    /// [`Diagnostics::untextured_triangles`](crate::Diagnostics).
     pub textureless: bool,
     /// Bounds of the geometry (what directional shadow maps must cover); `None`: unknown, the
     /// directional shadow map then covers a cube of side 100 around the origin.

@@ -5,6 +5,14 @@
 
 #include "shared/material.wgsl"
 
+// Whether the scene's materials may sample textures (not `SceneInfo::textureless`), a pipeline
+// constant of every kernel that reads them: without, every texture read is compiled out (the
+// resolve's, the rasterizer's alpha test's, the transparency's opacity) and a material's
+// factors stand alone. A SIMD driver that runs both sides of every branch runs a loop's body at
+// least once even where no lane enters it: on llvmpipe the sampling code, run for nothing,
+// tripled the resolve of an untextured scene.
+override TEXTURES: bool = true;
+
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
@@ -101,6 +109,9 @@ struct SlotRead {
 
 // (Material `mid` is read field by field from the binding: a whole material is 288 bytes.)
 fn read_slot(mid: u32, k: u32, tri: vec3<u32>, bary: vec3<f32>, srgb: bool) -> SlotRead {
+    if !TEXTURES {
+        return SlotRead(false, vec4<f32>(0.0));
+    }
     let t = materials[mid].slots[k];
     let uv = slot_uv(t, tri, bary);
     if !(texture_fits(t, arrayLength(&texels)) && all(abs(uv) < vec2<f32>(1e6))) {
