@@ -235,6 +235,113 @@ fn composite_into_the_hosts_storage_texture() {
     );
 }
 
+/// Which of the scene's features [`import_strip`]'s [`SceneInfo`] declares.
+#[derive(Clone, Copy, Default)]
+struct Declared {
+    masked: bool,
+    blended: bool,
+    textureless: bool,
+}
+
+/// A material of grey `base` with `flags`, its base-colour slot naming the 2x2 texture at
+/// `texture_offset` of [`import_strip`]'s texels (read only where `flags` has the slot's bit).
+fn strip_material(base: f32, alpha: f32, flags: u32, texture_offset: u32) -> GpuMaterial {
+    let mut m = GpuMaterial {
+        base_color: [base, base, base, alpha],
+        roughness: 1.0,
+        flags,
+        ..Default::default()
+    };
+    m.slots[SLOT_BASE_COLOR] = deep_gbuffer::GpuTextureSlot::new(
+        &deep_gbuffer::TextureRef::new(0),
+        (texture_offset, 2, 2),
+        1.0,
+    );
+    m
+}
+
+/// The host's buffers for `triangles` (indices, material id) over eight vertices: 0-3 a quad
+/// facing +z, 4 NaN, 5-7 a small triangle left of the quad; the texels hold a grey opaque 2x2
+/// texture at offset 0 and a grey transparent one at offset 4 (a 2x2 texture at offset 7 does
+/// not fit). Lit by a shadow-casting sun.
+fn import_strip(
+    device: &wgpu::Device,
+    triangles: &[([u32; 3], u32)],
+    materials: &[GpuMaterial],
+    declared: Declared,
+) -> SceneBuffers {
+    let nan = f32::NAN;
+    let positions: [f32; 24] = [
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0, nan, 0.0, 0.0, -1.8, -0.3,
+        0.0, -1.2, -0.3, 0.0, -1.5, 0.3, 0.0,
+    ];
+    let normals: Vec<f32> = (0..8).flat_map(|_| [0.0, 0.0, 1.0]).collect();
+    let uvs = [0.25f32; 16];
+    let indices: Vec<u32> = triangles.iter().flat_map(|(t, _)| *t).collect();
+    let ids: Vec<u32> = triangles.iter().map(|(_, m)| *m).collect();
+    let texels = [[128u8, 128, 128, 255].repeat(4), [128u8, 128, 128, 0].repeat(4)].concat();
+    let buffers = ImportedBuffers {
+        positions: storage(device, "host.positions", bytemuck::cast_slice(&positions)),
+        normals: storage(device, "host.normals", bytemuck::cast_slice(&normals)),
+        uvs: storage(device, "host.uvs", bytemuck::cast_slice(&uvs)),
+        indices: storage(device, "host.indices", bytemuck::cast_slice(&indices)),
+        triangle_materials: storage(device, "host.ids", bytemuck::cast_slice(&ids)),
+        materials: storage(device, "host.materials", bytemuck::cast_slice(materials)),
+        texels: storage(device, "host.texels", &texels),
+        uvs1: None,
+        tangents: None,
+        vertex_count: 8,
+        triangle_count: triangles.len() as u32,
+        material_count: materials.len() as u32,
+    };
+    let info = SceneInfo {
+        lights: vec![Light {
+            name: "key".into(),
+            kind: LightKind::Directional { direction: Vec3::new(0.3, -0.2, -1.0) },
+            color: Vec3::ONE,
+            intensity: 2.0,
+            casts_shadows: true,
+        }],
+        ambient: Vec3::splat(0.2),
+        reflective: false,
+        emissive: false,
+        blended: declared.blended,
+        masked: declared.masked,
+        textureless: declared.textureless,
+        bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
+    };
+    SceneBuffers::import(device, buffers, info).unwrap()
+}
+
+/// Two 40x24 frames of an [`import_strip`] scene: the second's composite and both frames'
+/// diagnostics.
+fn render_strip(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+) -> (Vec<Vec3>, Vec<deep_gbuffer::Diagnostics>) {
+    let camera =
+        Camera::perspective(Vec3::new(-0.3, 0.0, 3.0), Vec3::new(-0.3, 0.0, 0.0), 50.0, 0.1);
+    let mut renderer = Renderer::new(device, queue, Settings::with_size(40, 24)).unwrap();
+    let mut counts = Vec::new();
+    for _ in 0..2 {
+        renderer.render(device, queue, scene, &camera).unwrap();
+        counts.push(renderer.diagnostics(device, queue).unwrap());
+    }
+    let hdr = renderer.read_rgb(device, queue, renderer.hdr_buffer()).unwrap();
+    (hdr, counts)
+}
+
+/// The strip's two triangles of the quad, and the small triangle with material 1.
+const STRIP: [([u32; 3], u32); 3] = [([0, 1, 2], 0), ([0, 2, 3], 0), ([5, 6, 7], 1)];
+
+fn assert_same_image(image: &[Vec3], expected: &[Vec3]) {
+    assert_eq!(image.len(), expected.len());
+    for (i, (a, b)) in image.iter().zip(expected).enumerate() {
+        assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
+    }
+}
+
 /// The host's buffers as the CPU never sees them: bad indices, a bad material id, a NaN
 /// position and a texture past the texel buffer. Each bad triangle is rejected on the GPU (the
 /// image is bit for bit that of the good triangles alone) and counted once a frame. A texture
@@ -242,66 +349,7 @@ fn composite_into_the_hosts_storage_texture() {
 #[test]
 fn bad_imported_triangles_are_rejected_and_counted() {
     let (device, queue) = host_device();
-    let nan = f32::NAN;
-    // 0-3: a quad facing +z; 4: NaN; 5-7: a small triangle left of the quad.
-    let positions: [f32; 24] = [
-        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0, nan, 0.0, 0.0, -1.8, -0.3,
-        0.0, -1.2, -0.3, 0.0, -1.5, 0.3, 0.0,
-    ];
-    let normals: Vec<f32> = (0..8).flat_map(|_| [0.0, 0.0, 1.0]).collect();
-    let uvs = [0.25f32; 16];
-    let material = |base: f32, flags: u32, texture_offset: u32| {
-        let mut m = GpuMaterial {
-            base_color: [base, base, base, 1.0],
-            roughness: 1.0,
-            flags,
-            ..Default::default()
-        };
-        m.slots[SLOT_BASE_COLOR] = deep_gbuffer::GpuTextureSlot::new(
-            &deep_gbuffer::TextureRef::new(0),
-            (texture_offset, 2, 2),
-            1.0,
-        );
-        m
-    };
     let textured = deep_gbuffer::scene::upload::slot_flag(SLOT_BASE_COLOR);
-    let import = |triangles: &[([u32; 3], u32)], materials: &[GpuMaterial], textureless: bool| {
-        let indices: Vec<u32> = triangles.iter().flat_map(|(t, _)| *t).collect();
-        let ids: Vec<u32> = triangles.iter().map(|(_, m)| *m).collect();
-        let buffers = ImportedBuffers {
-            positions: storage(&device, "host.positions", bytemuck::cast_slice(&positions)),
-            normals: storage(&device, "host.normals", bytemuck::cast_slice(&normals)),
-            uvs: storage(&device, "host.uvs", bytemuck::cast_slice(&uvs)),
-            indices: storage(&device, "host.indices", bytemuck::cast_slice(&indices)),
-            triangle_materials: storage(&device, "host.ids", bytemuck::cast_slice(&ids)),
-            materials: storage(&device, "host.materials", bytemuck::cast_slice(materials)),
-            // Four grey texels: a 2x2 texture fits at offset 0 and not at offset 3.
-            texels: storage(&device, "host.texels", &[128, 128, 128, 255].repeat(4)),
-            uvs1: None,
-            tangents: None,
-            vertex_count: 8,
-            triangle_count: triangles.len() as u32,
-            material_count: materials.len() as u32,
-        };
-        let info = SceneInfo {
-            lights: vec![Light {
-                name: "key".into(),
-                kind: LightKind::Directional { direction: Vec3::new(0.3, -0.2, -1.0) },
-                color: Vec3::ONE,
-                intensity: 2.0,
-                casts_shadows: true,
-            }],
-            ambient: Vec3::splat(0.2),
-            reflective: false,
-            emissive: false,
-            blended: false,
-            masked: false,
-            textureless,
-            bounds: Some((Vec3::new(-2.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0))),
-        };
-        SceneBuffers::import(&device, buffers, info).unwrap()
-    };
-    let good = [([0, 1, 2], 0), ([0, 2, 3], 0), ([5, 6, 7], 1)];
     let bad = [
         ([0, 1, 2], 0),
         ([0, 1, u32::MAX], 0),
@@ -314,24 +362,13 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     ];
     // The bad scene's material 1 names a texture past the texels; it is drawn untextured,
     // exactly as the good scene's untextured material 1.
-    let reference = import(&good, &[material(0.5, 0, 0), material(0.8, 0, 0)], false);
-    let scene = import(&bad, &[material(0.5, 0, 0), material(0.8, textured, 3)], false);
+    let untextured = [strip_material(0.5, 1.0, 0, 0), strip_material(0.8, 1.0, 0, 0)];
+    let past = [strip_material(0.5, 1.0, 0, 0), strip_material(0.8, 1.0, textured, 7)];
+    let reference = import_strip(&device, &STRIP, &untextured, Declared::default());
+    let scene = import_strip(&device, &bad, &past, Declared::default());
 
-    let (w, h) = (40u32, 24u32);
-    let camera =
-        Camera::perspective(Vec3::new(-0.3, 0.0, 3.0), Vec3::new(-0.3, 0.0, 0.0), 50.0, 0.1);
-    let frame = |scene: &SceneBuffers| {
-        let mut renderer = Renderer::new(&device, &queue, Settings::with_size(w, h)).unwrap();
-        let mut counts = Vec::new();
-        for _ in 0..2 {
-            renderer.render(&device, &queue, scene, &camera).unwrap();
-            counts.push(renderer.diagnostics(&device, &queue).unwrap());
-        }
-        let hdr = renderer.read_rgb(&device, &queue, renderer.hdr_buffer()).unwrap();
-        (hdr, counts)
-    };
-    let (expected, clean) = frame(&reference);
-    let (image, counts) = frame(&scene);
+    let (expected, clean) = render_strip(&device, &queue, &reference);
+    let (image, counts) = render_strip(&device, &queue, &scene);
     assert!(clean.iter().all(|d| !d.has_bad_input()), "{clean:?}");
     for d in &counts {
         // Counted once a frame (the shadow map's raster reads the same triangles, uncounted).
@@ -351,23 +388,84 @@ fn bad_imported_triangles_are_rejected_and_counted() {
     assert!(image.iter().all(|p| p.is_finite()));
     let lit = expected.iter().filter(|p| p.x > 0.3).count();
     assert!(lit > 200, "the quad and the triangle are in view ({lit} pixels)");
-    for (i, (a, b)) in image.iter().zip(&expected).enumerate() {
-        assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
-    }
+    assert_same_image(&image, &expected);
 
     // Material 1's texture fits: sampled, it darkens the triangle; in a scene marked textureless
     // the triangle has its factors alone, as the reference, and is counted.
-    let named = [material(0.5, 0, 0), material(0.8, textured, 0)];
-    let (sampled, sampled_counts) = frame(&import(&good, &named, false));
-    let (marked, marked_counts) = frame(&import(&good, &named, true));
+    let named = [strip_material(0.5, 1.0, 0, 0), strip_material(0.8, 1.0, textured, 0)];
+    let (sampled, sampled_counts) =
+        render_strip(&device, &queue, &import_strip(&device, &STRIP, &named, Declared::default()));
+    let marked = Declared { textureless: true, ..Declared::default() };
+    let (marked, marked_counts) =
+        render_strip(&device, &queue, &import_strip(&device, &STRIP, &named, marked));
     assert!(sampled_counts.iter().all(|d| !d.has_bad_input()), "{sampled_counts:?}");
     let darker = sampled.iter().zip(&expected).filter(|(a, b)| a.x < 0.9 * b.x).count();
     assert!(darker > 10, "the grey texture shows on the small triangle ({darker} pixels darker)");
     for d in &marked_counts {
         assert_eq!((d.rejected_triangles(), d.untextured_triangles), (0, 1), "{d:?}");
     }
-    for (i, (a, b)) in marked.iter().zip(&expected).enumerate() {
-        assert_eq!(a.to_array(), b.to_array(), "pixel {i}");
+    assert_same_image(&marked, &expected);
+}
+
+/// A masked and a blended material whose texture is transparent: where textures are sampled
+/// the texture's alpha cuts the triangle away (the image is the quad's alone); in a scene
+/// marked textureless the material's factors alone decide its coverage and opacity, as the same
+/// material without the texture (bit for bit), and the triangle is counted.
+#[test]
+fn textureless_scenes_cut_and_blend_by_factors_alone() {
+    let (device, queue) = host_device();
+    let textured = deep_gbuffer::scene::upload::slot_flag(SLOT_BASE_COLOR);
+    let mask = deep_gbuffer::scene::upload::MATERIAL_MASK;
+    let blend = deep_gbuffer::scene::upload::MATERIAL_BLEND;
+    let quad = render_strip(
+        &device,
+        &queue,
+        &import_strip(&device, &STRIP[..2], &[strip_material(0.5, 1.0, 0, 0)], Declared::default()),
+    )
+    .0;
+    let cases = [
+        ("masked", mask, 1.0, Declared { masked: true, ..Declared::default() }),
+        ("blended", blend, 0.6, Declared { blended: true, ..Declared::default() }),
+    ];
+    for (name, flags, alpha, declared) in cases {
+        let base = strip_material(0.5, 1.0, 0, 0);
+        let material = |flags, offset| GpuMaterial {
+            alpha_cutoff: 0.5,
+            ..strip_material(0.8, alpha, flags, offset)
+        };
+        let with_texture = |offset| [base, material(flags | textured, offset)];
+        let factors = [base, material(flags, 0)];
+        let (expected, _) =
+            render_strip(&device, &queue, &import_strip(&device, &STRIP, &factors, declared));
+        let differs = expected.iter().zip(&quad).filter(|(a, b)| a != b).count();
+        assert!(differs > 10, "{name}: the untextured triangle shows ({differs} pixels)");
+
+        // Sampled, the transparent texture takes the triangle away; the opaque one keeps it.
+        let (cut, counts) = render_strip(
+            &device,
+            &queue,
+            &import_strip(&device, &STRIP, &with_texture(4), declared),
+        );
+        assert!(counts.iter().all(|d| !d.has_bad_input()), "{name}: {counts:?}");
+        for (i, (a, b)) in cut.iter().zip(&quad).enumerate() {
+            assert!((*a - *b).abs().max_element() < 1e-5, "{name}: pixel {i}: {a} against {b}");
+        }
+        let (kept, _) = render_strip(
+            &device,
+            &queue,
+            &import_strip(&device, &STRIP, &with_texture(0), declared),
+        );
+        let shown = kept.iter().zip(&quad).filter(|(a, b)| a != b).count();
+        assert!(shown > 10, "{name}: the opaque texture keeps the triangle ({shown} pixels)");
+
+        // Marked textureless, the transparent texture is not read: the factors decide.
+        let marked = Declared { textureless: true, ..declared };
+        let (image, counts) =
+            render_strip(&device, &queue, &import_strip(&device, &STRIP, &with_texture(4), marked));
+        for d in &counts {
+            assert_eq!((d.rejected_triangles(), d.untextured_triangles), (0, 1), "{name}: {d:?}");
+        }
+        assert_same_image(&image, &expected);
     }
 }
 
