@@ -284,6 +284,10 @@ struct RadiosityArgs {
     /// Slices per pixel of the slices gather [default: 2].
     #[arg(long)]
     radiosity_slices: Option<u32>,
+    /// Taps per layer-1 point of the gather that lets surfaces the camera does not see pass on
+    /// the light they receive in the next frame's bounce, 0 to 256 (0: none) [default: 8].
+    #[arg(long)]
+    radiosity_layer1_samples: Option<u32>,
     /// A radiosity tap h pixels away reads level floor(log2 h) - this of the gather source,
     /// 0 to 8 [default: 4].
     #[arg(long)]
@@ -310,6 +314,7 @@ impl RadiosityArgs {
         r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
+        r.layer1_samples = self.radiosity_layer1_samples.unwrap_or(r.layer1_samples);
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
         r.damping = self.damping.unwrap_or(r.damping);

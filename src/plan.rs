@@ -46,6 +46,9 @@ pub enum PassId {
     Direct,
     /// Outgoing radiance of both layers and the radiosity gather.
     Radiosity,
+    /// The radiosity gather at layer 1's points, for the next frame's bounce
+    /// ([`RadiositySettings::layer1_samples`](crate::RadiositySettings::layer1_samples)).
+    RadiosityLayer1,
     /// The temporal filter of the gathered irradiance.
     RadiosityTemporal,
     /// The bilateral blur of the filtered irradiance.
@@ -83,7 +86,7 @@ pub(crate) enum StageId {
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 19] = [
+    pub const FIXED: [PassId; 20] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -95,6 +98,7 @@ impl PassId {
         PassId::AoBlur,
         PassId::Direct,
         PassId::Radiosity,
+        PassId::RadiosityLayer1,
         PassId::RadiosityTemporal,
         PassId::RadiosityBlur,
         PassId::Reflections,
@@ -120,6 +124,7 @@ impl PassId {
             PassId::Shadow { name, .. } => return Cow::Owned(format!("shadow.{name}")),
             PassId::Direct => "direct",
             PassId::Radiosity => "radiosity",
+            PassId::RadiosityLayer1 => "radiosity.layer1",
             PassId::RadiosityTemporal => "radiosity.temporal",
             PassId::RadiosityBlur => "radiosity.blur",
             PassId::Reflections => "reflections",
@@ -138,9 +143,10 @@ impl PassId {
             PassId::Pyramid | PassId::Ao | PassId::AoBlur => Some(Effect::Ao),
             PassId::Shadow { .. } => Some(Effect::Shadows),
             PassId::Direct => Some(Effect::Direct),
-            PassId::Radiosity | PassId::RadiosityTemporal | PassId::RadiosityBlur => {
-                Some(Effect::Radiosity)
-            }
+            PassId::Radiosity
+            | PassId::RadiosityLayer1
+            | PassId::RadiosityTemporal
+            | PassId::RadiosityBlur => Some(Effect::Radiosity),
             PassId::Reflections => Some(Effect::Reflections),
             PassId::TransparencyPeel | PassId::TransparencyComposite => Some(Effect::Transparency),
             PassId::Dof => Some(Effect::Dof),
@@ -168,9 +174,10 @@ impl PassId {
             PassId::Pyramid | PassId::Ao | PassId::AoBlur => StageId::Ao,
             PassId::Shadow { .. } => StageId::Shadows,
             PassId::Direct => StageId::Direct,
-            PassId::Radiosity | PassId::RadiosityTemporal | PassId::RadiosityBlur => {
-                StageId::Radiosity
-            }
+            PassId::Radiosity
+            | PassId::RadiosityLayer1
+            | PassId::RadiosityTemporal
+            | PassId::RadiosityBlur => StageId::Radiosity,
             PassId::Reflections => StageId::Reflections,
             PassId::Composite => StageId::Composite,
             PassId::TransparencyPeel | PassId::TransparencyComposite => StageId::Transparency,
@@ -425,7 +432,11 @@ impl Plan {
             passes.push(PassId::Direct);
         }
         if radiosity {
-            passes.extend([PassId::Radiosity, PassId::RadiosityTemporal]);
+            passes.push(PassId::Radiosity);
+            if layers == 2 && settings.radiosity.layer1_samples > 0 {
+                passes.push(PassId::RadiosityLayer1);
+            }
+            passes.push(PassId::RadiosityTemporal);
             if settings.radiosity.blur_radius > 0 {
                 passes.push(PassId::RadiosityBlur);
             }

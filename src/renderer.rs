@@ -721,7 +721,8 @@ impl Renderer {
             // The history is usable only if this stage drew the last frame.
             let history = self.history.is_some() && st.radiosity.is_some();
             let radiosity = st.radiosity.get_or_insert_with(|| RadiosityStage::new(device, s));
-            radiosity.prepare(queue, s, history);
+            let layer1 = plan.contains(&PassId::RadiosityLayer1);
+            radiosity.prepare(device, queue, s, history, layer1);
         }
         if plan.runs(Effect::Reflections) {
             let reflections =

@@ -399,6 +399,12 @@ pub struct RadiositySettings {
     /// real pixel of its block, and fill in the rest with a depth- and normal-aware upsample
     /// (`wgsl/upsample.wgsl`) before the temporal filter.
     pub downsample: u32,
+    /// Taps per layer-1 point of a second gather (`radiosity.layer1`, at the same resolution)
+    /// that finds the irradiance of the surfaces the camera does not see, so that they reflect
+    /// it on the next frame's bounce; 0: none (layer 1 sends its direct light and emission
+    /// alone, and a bounce that lands behind layer 0 stops there). 0 to 256; runs only where
+    /// layer 1 is drawn.
+    pub layer1_samples: u32,
 }
 
 /// How the radiosity pass gathers irradiance from what the layers show (`wgsl/radiosity.wgsl`).
@@ -485,6 +491,7 @@ impl Default for RadiositySettings {
             boost: Boost::ONE,
             mip_offset: 4,
             downsample: 1,
+            layer1_samples: 8,
         }
     }
 }
@@ -514,6 +521,12 @@ impl RadiositySettings {
             return Err(Error::setting(
                 "radiosity.samples",
                 format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if self.layer1_samples > 256 {
+            return Err(Error::setting(
+                "radiosity.layer1_samples",
+                format!("{} (must be 0 to 256)", self.layer1_samples),
             ));
         }
         if !(self.damping > 0.0 && self.damping <= 1.0) {

@@ -109,6 +109,17 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
                 "{what}: gathered irradiance {e} at pixel {p} above pi max B = {bound}"
             );
         }
+        // The layer-1 gather keeps E / c, a weighted mean of what it saw: bounded alike.
+        if let Some(layer1) = buffers.layer1 {
+            let records = read4(r, layer1);
+            finite_nonneg("layer-1 gather", &records);
+            for (t, e) in records.iter().enumerate() {
+                assert!(
+                    e.truncate().cmple(bound).all(),
+                    "{what}: layer-1 E / c {e} at texel {t} above pi max B = {bound}"
+                );
+            }
+        }
     }
     if let Some(b) = r.reflections_buffer() {
         finite_nonneg("reflections", &read4(r, b));

@@ -30,6 +30,24 @@ fn radiosity_reads_layer_1_and_needs_light() {
     );
 }
 
+/// The layer-1 gather runs where the radiosity does and layer 1 is drawn, unless its taps are 0.
+#[test]
+fn the_layer1_gather_follows_the_radiosity_and_layer_1() {
+    let gathers = |settings: &Settings| {
+        Plan::new(&cornell_info(), settings).contains(&PassId::RadiosityLayer1)
+    };
+    assert!(gathers(&Settings::default()));
+    assert!(!gathers(&Settings { layers: 1, ..Settings::default() }), "no layer 1 drawn");
+    let off = deep_gbuffer::RadiositySettings { layer1_samples: 0, ..Default::default() };
+    let plan = Plan::new(&cornell_info(), &Settings { radiosity: off, ..Settings::default() });
+    assert!(!plan.contains(&PassId::RadiosityLayer1));
+    assert_eq!(plan.layers, 2, "the gather still reads layer 1");
+    assert!(!gathers(&Settings { radiosity: no_radiosity(), ..Settings::default() }));
+    let too_many = deep_gbuffer::RadiositySettings { layer1_samples: 257, ..Default::default() };
+    let e = too_many.validate().unwrap_err().to_string();
+    assert!(e.contains("radiosity.layer1_samples"), "{e}");
+}
+
 fn cornell_info() -> SceneInfo {
     SceneInfo::of(&Scene::from_spec("builtin:cornell").unwrap())
 }
@@ -61,6 +79,7 @@ fn cornell_runs_everything_it_has() {
             ceiling_shadow(),
             PassId::Direct,
             PassId::Radiosity,
+            PassId::RadiosityLayer1,
             PassId::RadiosityTemporal,
             PassId::RadiosityBlur,
             PassId::Composite

@@ -121,7 +121,7 @@ fn first_frame_matches(
     what: &str,
 ) -> Vec<Vec4> {
     let g = gpu();
-    let deep_gbuffer::RadiosityBuffers { source, low, gathered: raw, .. } =
+    let deep_gbuffer::RadiosityBuffers { source, low, gathered: raw, layer1, .. } =
         renderer.radiosity_buffers().expect("radiosity runs");
     let source: Vec<SourceTexel> = bytemuck::pod_collect_to_vec(
         &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, source).unwrap(),
@@ -169,7 +169,7 @@ fn first_frame_matches(
     // At a lower resolution the texels the gather computed against the CPU's, then the upsample
     // of the GPU's own texels against the CPU's.
     let level = downsample_level(radiosity.downsample) as usize;
-    let expected = cpu::gather(frame, &uniform, layers, &source, &layout, level);
+    let expected = cpu::gather(frame, &uniform, layers, &source, &layout, (level, 0));
     let computed = match low {
         Some(low) => read4(renderer, low),
         None => raw.clone(),
@@ -192,7 +192,107 @@ fn first_frame_matches(
         }
     }
     assert!(raw.iter().all(|e| e.is_finite() && e.min_element() >= 0.0 && e.w <= 1.0));
+
+    // The layer-1 gather at the same texels, kept as E / c and the point's depth.
+    let layer1 = read4(renderer, layer1.expect("the layer-1 gather runs"));
+    let expected: Vec<Vec4> = cpu::gather(frame, &uniform, layers, &source, &layout, (level, 1))
+        .iter()
+        .enumerate()
+        .map(|(t, g)| {
+            let (w, _) = deep_gbuffer::cpu::pyramid::mip_size(frame.width, frame.height, level);
+            let (x, y) = deep_gbuffer::cpu::pyramid::mip_origin(
+                frame.width,
+                frame.height,
+                level,
+                (t as u32 % w, t as u32 / w),
+            );
+            cpu::layer1_record(*g, layers[1][(y * frame.width + x) as usize].depth)
+        })
+        .collect();
+    let computed = &layer1[..expected.len()];
+    let far = |a: &Vec4, e: &Vec4| {
+        a.w != e.w
+            || (a.truncate() - e.truncate()).abs().max_element()
+                > RADIOSITY_TOLERANCE * e.truncate().max_element().max(1.0)
+    };
+    let gather1 = format!("{what}: the layer-1 gather against the CPU's");
+    assert_few_differ(computed, &expected, RADIOSITY_FLIPPED_FRACTION, far, &gather1);
+    let found = expected.iter().filter(|e| e.w > 0.0 && e.truncate().max_element() > 0.01).count();
+    assert!(found > 0, "{what}: layer 1 receives light");
     raw
+}
+
+/// The next frame's layer 1 reflects what the layer-1 gather found at its point: B1 = boost D1 +
+/// boost delta (1 - metallic) rho / pi E1 + Le1 and H1 its reflected part, E1 the last frame's
+/// layer-1 record where the point is the same (a static camera: everywhere). Without the layer-1
+/// gather layer 1 sends its direct light and emission alone.
+#[test]
+fn layer1_reflects_the_last_frames_layer1_gather() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    for layer1_samples in [8, 0] {
+        let radiosity = RadiositySettings { layer1_samples, ..Default::default() };
+        let s = Settings { radiosity: radiosity.clone(), ..settings(64, 48) };
+        let mut renderer = Renderer::new(&g.device, &g.queue, s).unwrap();
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        let plan = renderer.last_plan().expect("a frame ran").clone();
+        let runs = plan.contains(&deep_gbuffer::PassId::RadiosityLayer1);
+        assert_eq!(runs, layer1_samples > 0, "{}", plan);
+        let record = renderer.radiosity_buffers().unwrap().layer1.map(|b| read4(&renderer, b));
+        assert_eq!(record.is_some(), runs);
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+
+        let layer1 = renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap().samples;
+        let diffuse1 = renderer.read_rgb(&g.device, &g.queue, renderer.diffuse_buffer(1)).unwrap();
+        let source: Vec<SourceTexel> = bytemuck::pod_collect_to_vec(
+            &deep_gbuffer::gpu::read_buffer(
+                &g.device,
+                &g.queue,
+                renderer.radiosity_buffers().unwrap().source,
+            )
+            .unwrap(),
+        );
+        let layout = PyramidLayout::new(64, 48);
+        let uniform = RadiosityUniform::new(&radiosity, &layout, true, 1);
+        let (mut points, mut bounced) = (0, 0);
+        for (p, s1) in layer1.iter().enumerate() {
+            if s1.depth.is_nan() || s1.depth <= 0.0 {
+                continue;
+            }
+            points += 1;
+            let e = match &record {
+                Some(r) if (r[p].w - s1.depth).abs() <= radiosity.history_tolerance => {
+                    r[p].truncate()
+                }
+                _ => glam::Vec3::ZERO,
+            };
+            let boost = cpu::boost(&uniform, s1.base_color);
+            let reflected =
+                boost * radiosity.damping * (1.0 - s1.metallic) * s1.occlusion * s1.base_color * e
+                    / std::f32::consts::PI
+                    + s1.emissive;
+            let b = boost * diffuse1[p] + reflected;
+            // RGB9E5: within 2^-9 of a texel's largest channel, besides f32 rounding.
+            let close = |a: glam::Vec3, e: glam::Vec3| {
+                (a - e).abs().max_element()
+                    <= e.max_element() / 256.0 + 1e-5 * e.max_element().max(1.0)
+            };
+            let (got_b, got_h) = (source[p].radiance(1), source[p].hidden(1));
+            assert!(close(got_b, b), "{layer1_samples} taps, pixel {p}: B1 {got_b} vs {b}");
+            assert!(close(got_h, reflected), "pixel {p}: H1 {got_h} vs {reflected}");
+            if (reflected - s1.emissive).max_element() > 0.05 * b.max_element() {
+                bounced += 1;
+            }
+        }
+        eprintln!("{layer1_samples} taps: {bounced} of {points} layer-1 points reflect a bounce");
+        if layer1_samples > 0 {
+            assert!(bounced > points / 4, "{bounced} of {points} layer-1 points reflect a bounce");
+        } else {
+            assert_eq!(bounced, 0);
+        }
+    }
 }
 
 /// On a static camera, with the spiral held still, the multi-bounce feedback and the temporal

@@ -7,7 +7,9 @@
 //   previous frame's filtered irradiance at this point spread over its whole hemisphere (the
 //   irradiance found over the share it covers; reprojected; 0 where there is none) and
 //   boost(rho) = unsaturated + (saturated - unsaturated) (max rho - min rho) / max rho (1 by
-//   default: energy conserving). Layer 1 has no irradiance of its own: B1 = boost D1 + Le1.
+//   default: energy conserving). Layer 1 reflects the irradiance the last frame's layer-1 gather
+//   found at its point (below; reprojected by layer 1's motion, none where that point was not
+//   layer 1's last frame or the gather did not run), or none: B1 = boost D1 + Le1.
 //   It writes level 0 of the gather source, 32 bytes a pixel and the only thing the taps
 //   read: both layers' view depths, B in RGB9E5, view-space normals (octahedral, 2x16 snorm)
 //   and H, the radiance of the surface's far side (below).
@@ -22,8 +24,8 @@
 // sphere lit from above seen from the ground beside it) does not reach X.
 // Such a surface still hides its sectors but sends H, the part of B that does not depend on
 // which way the surface faces: its emission (the ground truth's surfaces emit on both sides)
-// and the indirect light it reflects, boost delta (1 - metallic) rho / pi E_prev on layer 0
-// (none on layer 1, which has no irradiance of its own, nor on the first frame).
+// and the indirect light it reflects, boost delta (1 - metallic) rho / pi E_prev (none on the
+// first frame, nor on layer 1 without its gather).
 // radiosity_gather: over the N spiral taps (wgsl/shared/spiral.wgsl, turned every frame) of a
 //   world-space radius, Y from layer 0, or from layer 1 where the layer-0 point fails; a tap
 //   counts only with w.n_X > 0 and, unless the test is off, w.n_Y < 0 (Y faces X). With M the
@@ -45,6 +47,13 @@
 //   over the share c = (1 / S) sum_slices |n_p| W_total / SECTORS (sectors hidden) of the
 //   cosine-weighted hemisphere, and writes E_seen and c: the directions no surface covers are
 //   left to the ambient term. The spiral turns every frame (jitter), and so do the slices.
+// radiosity_gather with RECEIVER = 1 (`radiosity.layer1`, `layer1_samples` taps): the same
+//   gather at layer 1's points, so that a surface the camera does not see passes on the light
+//   it receives: without it a bounce that lands behind layer 0 stops there (on the Cornell box
+//   the multi-bounce light fell to 0.77 of the truth's, where 0.86 of it is within the two
+//   layers' reach). It writes, for the next frame's feedback only, E / c (the light found
+//   spread over the whole hemisphere, as the feedback spreads layer 0's) and the point's view
+//   depth, by which the next frame tells that its reprojected layer-1 point is the same.
 // Both write the irradiance itself, not a mean to be scaled by the confidence, so that the blur
 // and the temporal filter average it linearly (a mean of products is not the product of means:
 // a pixel that saw little but bright light next to one that saw much dim light would otherwise
@@ -57,6 +66,8 @@
 //   Non-finite values never enter the history.
 // src/cpu/radiosity.rs is the same on the CPU.
 // defines: PACKED SLICES
+// constants: LEVEL (the gather's resolution), RECEIVER (the layer whose points gather),
+// LAYER1_BOUNCE (the feedback reads the last frame's layer-1 gather)
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -93,6 +104,11 @@ struct Radiosity {
     levels: u32,
     // A tap h pixels away reads level floor(log2 h) - mip_offset of the source.
     mip_offset: u32,
+    // Taps per layer-1 point of the layer-1 gather (RECEIVER = 1).
+    layer1_samples: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
     offsets: array<vec4<u32>, 2>,
 }
 
@@ -134,6 +150,13 @@ struct SourceTexel {
 @group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> history_out: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> prev_vis0: array<u32>;
+// The layer-1 gather at the texels of the rotated grid's level LEVEL: E / c (rgb) and the view
+// depth of the point that gathered (a; 0: none). Written by the gather with RECEIVER = 1, read by
+// the next frame's feedback with LAYER1_BOUNCE.
+@group(0) @binding(12) var<storage, read_write> layer1_gathered: array<vec4<f32>>;
+
+// Whether the feedback reads `layer1_gathered` (the last frame ran the layer-1 gather).
+override LAYER1_BOUNCE: bool = false;
 
 fn sample0(p: u32) -> GSample {
 #if PACKED
@@ -155,20 +178,32 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.0e38));
 }
 
+// Where the point of sample s at `pixel` was in the previous frame: its pixel (false when off
+// the screen, when there is no history or no point) and its view depth `d` there.
+fn previous_point(pixel: vec2<u32>, s: GSample, at: ptr<function, vec2<u32>>, d: ptr<function, f32>) -> bool {
+    if params.history == 0u || !(s.depth > 0.0) {
+        return false;
+    }
+    let prev = vec2<f32>(pixel) + 0.5 - s.motion;
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
+        return false;
+    }
+    *at = vec2<u32>(prev);
+    let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
+    *d = -mat_mul(frame.prev_view, world).z;
+    return true;
+}
+
 // The previous frame's filtered history at the layer-0 point of `pixel`: the irradiance found
 // (rgb) and the share of the hemisphere it covers (a); `valid` tells whether there is one.
 fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<f32> {
     *valid = false;
-    if params.history == 0u || !(s.depth > 0.0) {
+    var prev = vec2<u32>(0u);
+    var d = 0.0;
+    if !previous_point(pixel, s, &prev, &d) {
         return vec4<f32>(0.0);
     }
-    let prev = vec2<f32>(pixel) + 0.5 - s.motion;
-    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
-        return vec4<f32>(0.0);
-    }
-    let q = u32(prev.y) * frame.width + u32(prev.x);
-    let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
-    let d = -mat_mul(frame.prev_view, world).z;
+    let q = prev.y * frame.width + prev.x;
     let z0 = prev_vis0[2u * q + 1u];
     let near0 = z0 != VIS_EMPTY && abs(d - bitcast<f32>(z0)) <= params.tolerance;
     let h = history_in[q];
@@ -177,6 +212,29 @@ fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<
     }
     *valid = true;
     return h;
+}
+
+// The last frame's layer-1 gather at the layer-1 point of `pixel` (sample s), spread over the
+// hemisphere (E / c): read at the texel of level LEVEL over the point's last pixel, and only
+// where that texel's point lay within `tolerance` of it (0 elsewhere).
+fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
+    var prev = vec2<u32>(0u);
+    var d = 0.0;
+    if !previous_point(pixel, s, &prev, &d) {
+        return vec3<f32>(0.0);
+    }
+    let t = prev >> vec2<u32>(LEVEL);
+    let g = layer1_gathered[t.y * mip_size(LEVEL).x + t.x];
+    if !(g.a > 0.0 && abs(d - g.a) <= params.tolerance) || !finite3(g.rgb) {
+        return vec3<f32>(0.0);
+    }
+    return max(g.rgb, vec3<f32>(0.0));
+}
+
+// The indirect light sample s reflects every way alike (its Lambertian part) from irradiance e,
+// damped and boosted for the next bounce, plus its emission: what its far side sends.
+fn reflected(s: GSample, e: vec3<f32>) -> vec3<f32> {
+    return boost(s.base_color) * params.damping * (1.0 - s.metallic) * s.occlusion * s.base_color / PI_R * e + s.emissive;
 }
 
 // A sample's normal as the gather source holds it, in view space (0 where there is no surface).
@@ -204,15 +262,19 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        hidden0 = boost(s0.base_color) * params.damping * (1.0 - s0.metallic) * s0.occlusion * s0.base_color / PI_R * e + s0.emissive;
+        hidden0 = reflected(s0, e);
         out0 = boost(s0.base_color) * diffuse0[p].rgb + hidden0;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
     var hidden1 = vec3<f32>(0.0);
     if s1.depth > 0.0 {
-        hidden1 = s1.emissive;
-        out1 = boost(s1.base_color) * diffuse1[p].rgb + s1.emissive;
+        var e1 = vec3<f32>(0.0);
+        if LAYER1_BOUNCE {
+            e1 = layer1_history_at(gid.xy, s1);
+        }
+        hidden1 = reflected(s1, e1);
+        out1 = boost(s1.base_color) * diffuse1[p].rgb + hidden1;
     }
     out0 = select(vec3<f32>(0.0), out0, finite3(out0));
     out1 = select(vec3<f32>(0.0), out1, finite3(out1));
@@ -261,7 +323,7 @@ fn sent(t: SourceTexel, layer: u32, c: vec3<f32>, at: vec2<f32>, z: f32) -> vec3
 // How far (the cosine) a surface may turn away from a point and still count as facing it.
 const FACING_SLACK: f32 = 1e-3;
 
-// The `slices` gather at `pixel` (layer-0 sample s): irradiance and confidence.
+// The `slices` gather at `pixel` (sample s of layer RECEIVER): irradiance and confidence.
 // `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
 // at a lower one, so that every 4x4 block of texels holds the 16 turns).
 fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32> {
@@ -269,7 +331,7 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
     let r_px = params.radius * pixels_per_unit(frame, s.depth);
     let slices = max(params.slices, 1u);
-    let steps = max(params.samples / (2u * slices), 1u);
+    let steps = max(taps() / (2u * slices), 1u);
     let noise = slice_noise(noise_at, params.turn);
     var seen = vec3<f32>(0.0);
     var covered = 0.0;
@@ -326,7 +388,7 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
     return vec4<f32>(PI_R * seen / f32(slices), min(covered / f32(slices), 1.0));
 }
 
-// The `spiral` gather at `pixel` (layer-0 sample s): irradiance and confidence.
+// The `spiral` gather at `pixel` (sample s of layer RECEIVER): irradiance and confidence.
 fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     let c = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
     let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
@@ -334,12 +396,13 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     var m = 0u;
-    for (var i = 0u; i < params.samples; i++) {
-        let tap = spiral_tap_turned(pixel, i, params.samples, r_px, params.turn);
+    let samples = taps();
+    for (var i = 0u; i < samples; i++) {
+        let tap = spiral_tap_turned(pixel, i, samples, r_px, params.turn);
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
             continue;
         }
-        let tap_level = mip_level(spiral_distance(i, params.samples, r_px), params.mip_offset, params.levels - 1u);
+        let tap_level = mip_level(spiral_distance(i, samples, r_px), params.mip_offset, params.levels - 1u);
         var q = 0u;
         let at = mip_texel(tap, tap_level, source_offset(tap_level), &q);
         let t = source[q];
@@ -383,7 +446,7 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
             e = 2.0 * PI_R / f32(m) * sum;
         }
     }
-    let confidence = f32(m) / f32(params.samples);
+    let confidence = f32(m) / f32(samples);
     return vec4<f32>(e * confidence, confidence);
 }
 
@@ -391,6 +454,17 @@ fn spiral_gather(pixel: vec2<u32>, s: GSample) -> vec4<f32> {
 // quarter resolution, each texel at the pixel it stands for, wgsl/upsample.wgsl filling in the
 // rest before the temporal filter).
 override LEVEL: u32 = 0u;
+
+// The layer whose points gather: 0 (`radiosity`) or 1 (`radiosity.layer1`).
+override RECEIVER: u32 = 0u;
+
+// Taps per point of the gathering layer.
+fn taps() -> u32 {
+    if RECEIVER == 1u {
+        return params.layer1_samples;
+    }
+    return params.samples;
+}
 
 @compute @workgroup_size(8, 8)
 fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -400,16 +474,34 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = mip_origin(LEVEL, gid.xy);
     let t = gid.y * size.x + gid.x;
-    let s = sample0(pixel.y * frame.width + pixel.x);
-    if !(s.depth > 0.0) || params.samples == 0u {
-        raw[t] = vec4<f32>(0.0);
-        return;
+    var s: GSample;
+    if RECEIVER == 1u {
+        s = sample1(pixel.y * frame.width + pixel.x);
+    } else {
+        s = sample0(pixel.y * frame.width + pixel.x);
     }
+    var g = vec4<f32>(0.0);
+    if s.depth > 0.0 && taps() > 0u {
 #if SLICES
-    raw[t] = slices_gather(pixel, gid.xy, s);
+        g = slices_gather(pixel, gid.xy, s);
 #else
-    raw[t] = spiral_gather(pixel, s);
+        g = spiral_gather(pixel, s);
 #endif
+    }
+    if RECEIVER == 1u {
+        layer1_gathered[t] = layer1_record(g, s.depth);
+    } else {
+        raw[t] = g;
+    }
+}
+
+// What the layer-1 gather keeps of its irradiance and confidence g at a point of view depth z:
+// E / c (0 where it found nothing) and z (0 where there is no point).
+fn layer1_record(g: vec4<f32>, z: f32) -> vec4<f32> {
+    if !(z > 0.0) || !(g.a > 0.0) || !finite3(g.rgb) {
+        return vec4<f32>(0.0, 0.0, 0.0, select(0.0, z, z > 0.0));
+    }
+    return vec4<f32>(g.rgb / g.a, z);
 }
 
 @compute @workgroup_size(8, 8)

@@ -65,19 +65,21 @@ pub fn source(
     rotated_grid(&base, layout)
 }
 
-/// The gathered irradiance (rgb) and confidence (w), by the estimator `u.estimator` names, of
-/// every texel of the rotated grid's `level` (0: every layer-0 pixel; above, each texel at the
-/// pixel it stands for, before the upsample), from the gather `source` (levels of `layout`);
-/// `layers` give the centre points and the spiral's normals.
+/// The gathered irradiance (rgb) and confidence (w), by the estimator `u.estimator` names, at
+/// the points of layer `receiver` (0: `radiosity`; 1: `radiosity.layer1`, with
+/// `u.layer1_samples` taps) in every texel of the rotated grid's `level` (0: every pixel; above,
+/// each texel at the pixel it stands for, before the upsample), from the gather `source` (levels
+/// of `layout`); `layers` give the centre points and the spiral's normals.
 pub fn gather(
     f: &FrameUniform,
     u: &RadiosityUniform,
     layers: [&[GSample]; 2],
     source: &[SourceTexel],
     layout: &PyramidLayout,
-    level: usize,
+    (level, receiver): (usize, usize),
 ) -> Vec<Vec4> {
-    let g = Gather { f, u, layers, source, layout };
+    let taps = if receiver == 1 { u.layer1_samples } else { u.samples };
+    let g = Gather { f, u, layers, source, layout, receiver, taps };
     let size = mip_size(f.width, f.height, level);
     let mut out = vec![Vec4::ZERO; (size.0 * size.1) as usize];
     for ty in 0..size.1 {
@@ -85,8 +87,8 @@ pub fn gather(
             let (x, y) = mip_origin(f.width, f.height, level, (tx, ty));
             let p = (y * f.width + x) as usize;
             let texel = (ty * size.0 + tx) as usize;
-            let s = &layers[0][p];
-            if s.depth.is_nan() || s.depth <= 0.0 || u.samples == 0 {
+            let s = &layers[receiver][p];
+            if s.depth.is_nan() || s.depth <= 0.0 || taps == 0 {
                 continue;
             }
             if u.estimator == 1 {
@@ -99,12 +101,12 @@ pub fn gather(
             let mut sum = Vec3::ZERO;
             let mut weight = 0.0f32;
             let mut m = 0u32;
-            for i in 0..u.samples {
-                let (tx, ty) = spiral_tap_turned(x, y, i, u.samples, r_px, u.turn);
+            for i in 0..taps {
+                let (tx, ty) = spiral_tap_turned(x, y, i, taps, r_px, u.turn);
                 if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
                     continue;
                 }
-                let h = spiral_distance(i, u.samples, r_px);
+                let h = spiral_distance(i, taps, r_px);
                 let level = mip_level(h, u.mip_offset, u.levels as usize - 1);
                 let (q, at) = mip_texel(layout, (tx as u32, ty as u32), level);
                 let t = &source[q];
@@ -137,7 +139,7 @@ pub fn gather(
                 (_, 0) => PI * sum / weight,
                 _ => 2.0 * PI / m as f32 * sum,
             };
-            let confidence = m as f32 / u.samples as f32;
+            let confidence = m as f32 / taps as f32;
             out[texel] = (e * confidence).extend(confidence);
         }
     }
@@ -154,6 +156,10 @@ struct Gather<'a> {
     layers: [&'a [GSample]; 2],
     source: &'a [SourceTexel],
     layout: &'a PyramidLayout,
+    /// The layer whose points gather.
+    receiver: usize,
+    /// Taps per point.
+    taps: u32,
 }
 
 impl Gather<'_> {
@@ -172,12 +178,12 @@ impl Gather<'_> {
     /// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
     fn slices(&self, (x, y): (u32, u32), noise_at: (u32, u32)) -> Vec4 {
         let (f, u) = (self.f, self.u);
-        let s = &self.layers[0][(y * f.width + x) as usize];
+        let s = &self.layers[self.receiver][(y * f.width + x) as usize];
         let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
         let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
         let r_px = u.radius * pixels_per_unit(f, s.depth);
         let slices = u.slices.max(1);
-        let steps = (u.samples / (2 * slices)).max(1);
+        let steps = (self.taps / (2 * slices)).max(1);
         let noise = slice_noise(noise_at.0, noise_at.1, u.turn);
         let (mut seen, mut covered) = (Vec3::ZERO, 0.0f32);
         for k in 0..slices {
@@ -219,4 +225,14 @@ impl Gather<'_> {
         }
         (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
     }
+}
+
+/// As `layer1_record`: what the layer-1 gather keeps of its irradiance and confidence `g` at a
+/// point of view depth `z`: E / c (0 where it found nothing) and z (0 where there is no point).
+pub fn layer1_record(g: Vec4, z: f32) -> Vec4 {
+    let z = if z > 0.0 { z } else { 0.0 };
+    if z == 0.0 || g.w.is_nan() || g.w <= 0.0 || !g.truncate().is_finite() {
+        return Vec4::new(0.0, 0.0, 0.0, z);
+    }
+    (g.truncate() / g.w).extend(z)
 }

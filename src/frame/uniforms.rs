@@ -106,6 +106,9 @@ pub struct RadiosityUniform {
     pub levels: u32,
     /// [`RadiositySettings::mip_offset`].
     pub mip_offset: u32,
+    /// [`RadiositySettings::layer1_samples`].
+    pub layer1_samples: u32,
+    pub _pad: [u32; 3],
     /// Level offsets in the gather source (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
@@ -131,6 +134,7 @@ mirrored!(
         estimator,
         levels,
         mip_offset,
+        layer1_samples,
         offsets
     ]
 );
@@ -162,6 +166,8 @@ impl RadiosityUniform {
             },
             levels: layout.levels.len().min(8) as u32,
             mip_offset: s.mip_offset,
+            layer1_samples: s.layer1_samples,
+            _pad: [0; 3],
             offsets: level_offsets(layout),
         }
     }

@@ -29,6 +29,10 @@ pub struct RadiosityBuffers<'a> {
     pub filtered: &'a wgpu::Buffer,
     /// The irradiance and confidence the composite reads (blurred unless the radius is 0).
     pub irradiance: &'a wgpu::Buffer,
+    /// The layer-1 gather (`radiosity.layer1`) at the texels of the gather's level: E / c of
+    /// each layer-1 point (the irradiance found, spread over the hemisphere) and its view depth
+    /// (0: none), `vec4<f32>` each; `None` until a frame ran it.
+    pub layer1: Option<&'a wgpu::Buffer>,
 }
 
 impl<'a> RadiosityBuffers<'a> {
@@ -56,6 +60,12 @@ pub(crate) struct RadiosityStage {
     turn: u32,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
+    /// The layer-1 gather, made by the first frame that runs it.
+    layer1: Option<wgpu::Buffer>,
+    /// Whether the last frame ran the layer-1 gather (the next one's feedback reads it).
+    layer1_written: bool,
+    /// Whether this frame's feedback reads the last frame's layer-1 gather.
+    layer1_bounce: bool,
 }
 
 impl RadiosityStage {
@@ -89,12 +99,34 @@ impl RadiosityStage {
             turn: 0,
             scratch: buffer("deep-gbuffer.radiosity.blur"),
             blurred: buffer("deep-gbuffer.radiosity.blurred"),
+            layer1: None,
+            layer1_written: false,
+            layer1_bounce: false,
         }
     }
 
     /// Starts a frame: filters into the other history buffer and writes the constants;
-    /// `history` tells whether the last frame's irradiance may be used.
-    pub(crate) fn prepare(&mut self, queue: &wgpu::Queue, s: &Settings, history: bool) {
+    /// `history` tells whether the last frame's irradiance may be used, `layer1` whether this
+    /// frame runs the layer-1 gather.
+    pub(crate) fn prepare(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        s: &Settings,
+        history: bool,
+        layer1: bool,
+    ) {
+        self.layer1_bounce = history && self.layer1_written;
+        self.layer1_written = layer1;
+        if layer1 && self.layer1.is_none() {
+            let (w, h) = mip_size(s.width, s.height, self.level as usize);
+            self.layer1 = Some(gpu::storage_buffer(
+                device,
+                "deep-gbuffer.radiosity.layer1",
+                u64::from(w) * u64::from(h) * 16,
+                wgpu::BufferUsages::empty(),
+            ));
+        }
         self.current = 1 - self.current;
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
         let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
@@ -110,6 +142,7 @@ impl RadiosityStage {
             gathered: &self.gathered,
             filtered,
             irradiance: if s.radiosity.blur_radius > 0 { &self.blurred } else { filtered },
+            layer1: self.layer1.as_ref().filter(|_| self.layer1_written),
         }
     }
 }
@@ -131,18 +164,24 @@ impl Stage for RadiosityStage {
             (slot::HISTORY_IN, history_in),
             (slot::HISTORY_OUT, history_out),
             (slot::PREV_VIS0, ctx.raster.previous_vis0()),
+            // Only the passes that use the layer-1 gather read or write it; the blur's
+            // scratch (unused here) stands in for it elsewhere.
+            (slot::LAYER1_GATHERED, self.layer1.as_ref().unwrap_or(&self.scratch)),
         ];
         let mut defines = ctx.settings.precision.defines();
         if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
             defines.push("SLICES");
         }
-        let run = |pass: &mut wgpu::ComputePass<'_>, entry| {
-            let pipeline = ctx.pipelines.get(ctx.device, "radiosity", entry, &defines, &[]);
+        let run = |pass: &mut wgpu::ComputePass<'_>, entry, constants: &[(&'static str, f64)]| {
+            let pipeline = ctx.pipelines.get(ctx.device, "radiosity", entry, &defines, constants);
             pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
         };
+        let level = ("LEVEL", f64::from(self.level));
+        let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
         match id {
             PassId::Radiosity => {
-                run(&mut pass, "radiosity_feedback");
+                let bounce = ("LAYER1_BOUNCE", f64::from(u8::from(self.layer1_bounce)));
+                run(&mut pass, "radiosity_feedback", &[level, bounce]);
                 let pipeline =
                     ctx.pipelines.get(ctx.device, "radiosity", "radiosity_source_level", &[], &[]);
                 for (i, level) in self.levels.layout().levels.iter().enumerate().skip(1) {
@@ -155,15 +194,13 @@ impl Stage for RadiosityStage {
                         (level.width, level.height),
                     );
                 }
-                let level = [("LEVEL", f64::from(self.level))];
                 let pipeline = ctx.pipelines.get(
                     ctx.device,
                     "radiosity",
                     "radiosity_gather",
                     &defines,
-                    &level,
+                    &[level],
                 );
-                let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
                 // At a lower resolution the gather writes its own buffer, upsampled into `raw`.
                 let target = self.low.as_ref().unwrap_or(&self.gathered);
                 let gather = entries.map(|(s, b)| (s, if s == slot::RAW { target } else { b }));
@@ -173,7 +210,18 @@ impl Stage for RadiosityStage {
                     upsample.record(ctx, &mut pass, [low, &self.gathered]);
                 }
             }
-            PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal"),
+            PassId::RadiosityLayer1 => {
+                let constants = [level, ("RECEIVER", 1.0)];
+                let pipeline = ctx.pipelines.get(
+                    ctx.device,
+                    "radiosity",
+                    "radiosity_gather",
+                    &defines,
+                    &constants,
+                );
+                pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, size);
+            }
+            PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal", &[]),
             PassId::RadiosityBlur => {
                 let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
                 blur.record(ctx, &mut pass, [history_out, &self.scratch, &self.blurred]);
