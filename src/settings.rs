@@ -376,9 +376,9 @@ pub struct RadiositySettings {
     /// `spiral`: other taps do not count. `slices`: a surface facing away still hides what lies
     /// behind it, and sends what its far side sends instead of what the camera sees of it: its
     /// emission and the indirect light it reflects (none on the first frame, and none from
-    /// layer 1), not its direct light (a sphere lit from above, seen from the ground beside it,
-    /// shows the ground its dark side). Off, every surface sends its visible side's light both
-    /// ways.
+    /// layer 1 without its gather, [`layer1_samples`](Self::layer1_samples)), not its direct
+    /// light (a sphere lit from above, seen from the ground beside it, shows the ground its dark
+    /// side). Off, every surface sends its visible side's light both ways.
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,
