@@ -99,6 +99,9 @@ struct SweepArgs {
     /// Radiosity tap counts to sweep.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_samples))]
     radiosity_samples: Vec<u32>,
+    /// Layer-1 gather tap counts to sweep (0: none).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_layer1_samples))]
+    radiosity_layer1_samples: Vec<u32>,
     /// Layer counts to sweep (1, 2).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().layers))]
     layers: Vec<u32>,
@@ -838,6 +841,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_slices: args.ao_slices,
         ao_samples: args.ao_samples,
         radiosity_samples: args.radiosity_samples,
+        radiosity_layer1_samples: args.radiosity_layer1_samples,
         layers: args.layers,
         precision: args.precision,
         position: args.position_encoding,

@@ -47,6 +47,9 @@ pub struct Knobs {
     pub ao_samples: u32,
     /// Radiosity taps per pixel.
     pub radiosity_samples: u32,
+    /// Taps per layer-1 point of the layer-1 gather ([`RadiositySettings::layer1_samples`];
+    /// 0: none).
+    pub radiosity_layer1_samples: u32,
     /// G-buffer layers (1: layer 0 only, for both effects; 2: the deep G-buffer).
     pub layers: u32,
     /// G-buffer encoding.
@@ -114,6 +117,7 @@ impl Knobs {
             motion_blur: MotionBlurSettings { shutter: self.shutter, ..base.motion_blur.clone() },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
+                layer1_samples: self.radiosity_layer1_samples,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
                 downsample: self.radiosity_downsample,
@@ -163,6 +167,8 @@ pub struct Grid {
     pub ao_samples: Vec<u32>,
     /// Radiosity taps.
     pub radiosity_samples: Vec<u32>,
+    /// Layer-1 gather taps.
+    pub radiosity_layer1_samples: Vec<u32>,
     /// Layer counts.
     pub layers: Vec<u32>,
     /// Encodings.
@@ -207,6 +213,7 @@ impl Default for Grid {
             ao_slices: vec![settings.ao.slices],
             ao_samples: vec![4, 8, 16, 32, 64],
             radiosity_samples: vec![5, 9, 13, 19, 27],
+            radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
             position: vec![settings.position],
@@ -248,6 +255,7 @@ impl Grid {
             ao_slices: settings.ao.slices,
             ao_samples: settings.ao.samples,
             radiosity_samples: settings.radiosity.samples,
+            radiosity_layer1_samples: settings.radiosity.layer1_samples,
             layers: 2,
             precision: settings.precision,
             position: settings.position,
@@ -277,6 +285,7 @@ impl Grid {
         let k = times(k, &self.transparency_layers, |k, v| k.transparency_layers = v);
         let k = times(k, &self.shutter, |k, v| k.shutter = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
+        let k = times(k, &self.radiosity_layer1_samples, |k, v| k.radiosity_layer1_samples = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
         let k = times(k, &self.ao_slices, |k, v| k.ao_slices = v);
@@ -587,7 +596,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -608,11 +617,12 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
             k.radiosity_samples,
+            k.radiosity_layer1_samples,
             k.layers,
             k.precision,
             k.position.name(),
@@ -673,12 +683,13 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 15] = [
+    let optional: [Column; 16] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("position", |k| k.position.name().to_string()),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
+        ("layer-1 radiosity taps", |k| k.radiosity_layer1_samples.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
         ("AO downsample", |k| k.ao_downsample.to_string()),
@@ -898,9 +909,18 @@ mod tests {
     #[test]
     fn configurations_start_from_the_grid_base() {
         let base = Settings::default().scaled(512.0);
-        let grid =
-            Grid { ao_samples: vec![8], radiosity_samples: vec![9], base, ..Grid::default() };
-        for k in grid.configurations() {
+        let grid = Grid {
+            ao_samples: vec![8],
+            radiosity_samples: vec![9],
+            radiosity_layer1_samples: vec![0, 4],
+            base,
+            ..Grid::default()
+        };
+        let configurations = grid.configurations();
+        let layer1: Vec<u32> =
+            configurations.iter().map(|k| k.settings(64, 48).radiosity.layer1_samples).collect();
+        assert!(layer1.contains(&0) && layer1.contains(&4), "{layer1:?}");
+        for k in configurations {
             let s = k.settings(64, 48);
             assert_eq!((s.width, s.height, s.ao.samples, s.radiosity.samples), (64, 48, 8, 9));
             assert_eq!(s.ao.radius, grid.base.ao.radius);
