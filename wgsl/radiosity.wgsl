@@ -232,9 +232,10 @@ fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
 }
 
 // The indirect light sample s reflects every way alike (its Lambertian part) from irradiance e,
-// damped and boosted for the next bounce, plus its emission: what its far side sends.
-fn reflected(s: GSample, e: vec3<f32>) -> vec3<f32> {
-    return boost(s.base_color) * params.damping * (1.0 - s.metallic) * s.occlusion * s.base_color / PI_R * e + s.emissive;
+// damped and boosted (`b`, its boost) for the next bounce, plus its emission: what its far side
+// sends.
+fn reflected(s: GSample, b: f32, e: vec3<f32>) -> vec3<f32> {
+    return b * params.damping * (1.0 - s.metallic) * s.occlusion * s.base_color / PI_R * e + s.emissive;
 }
 
 // A sample's normal as the gather source holds it, in view space (0 where there is no surface).
@@ -262,19 +263,21 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
         let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
-        hidden0 = reflected(s0, e);
-        out0 = boost(s0.base_color) * diffuse0[p].rgb + hidden0;
+        let b0 = boost(s0.base_color);
+        hidden0 = reflected(s0, b0, e);
+        out0 = b0 * diffuse0[p].rgb + hidden0;
     }
     let s1 = sample1(p);
     var out1 = vec3<f32>(0.0);
     var hidden1 = vec3<f32>(0.0);
     if s1.depth > 0.0 {
-        var e1 = vec3<f32>(0.0);
+        let b1 = boost(s1.base_color);
+        // Without the last frame's layer-1 gather the reflected part is 0: compiled out.
+        hidden1 = s1.emissive;
         if LAYER1_BOUNCE {
-            e1 = layer1_history_at(gid.xy, s1);
+            hidden1 = reflected(s1, b1, layer1_history_at(gid.xy, s1));
         }
-        hidden1 = reflected(s1, e1);
-        out1 = boost(s1.base_color) * diffuse1[p].rgb + hidden1;
+        out1 = b1 * diffuse1[p].rgb + hidden1;
     }
     out0 = select(vec3<f32>(0.0), out0, finite3(out0));
     out1 = select(vec3<f32>(0.0), out1, finite3(out1));
