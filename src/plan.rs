@@ -535,7 +535,12 @@ impl fmt::Display for Plan {
             if self.ao_two_layers { ", two layers" } else { "" }
         )?;
         writeln!(f, "direct:  {}", why(Effect::Direct))?;
-        writeln!(f, "radiosity: {}", why(Effect::Radiosity))?;
+        writeln!(
+            f,
+            "radiosity: {}{}",
+            why(Effect::Radiosity),
+            if self.contains(&PassId::RadiosityLayer1) { ", layer 1 gathers" } else { "" }
+        )?;
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
         writeln!(f, "dof:     {}", why(Effect::Dof))?;
         writeln!(f, "motion blur: {}", why(Effect::MotionBlur))?;

@@ -37,11 +37,14 @@ fn the_layer1_gather_follows_the_radiosity_and_layer_1() {
         Plan::new(&cornell_info(), settings).contains(&PassId::RadiosityLayer1)
     };
     assert!(gathers(&Settings::default()));
+    let printed = Plan::new(&cornell_info(), &Settings::default()).to_string();
+    assert!(printed.contains("radiosity: runs, layer 1 gathers\n"), "{printed}");
     assert!(!gathers(&Settings { layers: 1, ..Settings::default() }), "no layer 1 drawn");
     let off = deep_gbuffer::RadiositySettings { layer1_samples: 0, ..Default::default() };
     let plan = Plan::new(&cornell_info(), &Settings { radiosity: off, ..Settings::default() });
     assert!(!plan.contains(&PassId::RadiosityLayer1));
     assert_eq!(plan.layers, 2, "the gather still reads layer 1");
+    assert!(plan.to_string().contains("radiosity: runs\n"), "{plan}");
     assert!(!gathers(&Settings { radiosity: no_radiosity(), ..Settings::default() }));
     let too_many = deep_gbuffer::RadiositySettings { layer1_samples: 257, ..Default::default() };
     let e = too_many.validate().unwrap_err().to_string();
