@@ -303,7 +303,10 @@ fn slice_estimators_converge_to_the_corner_closed_form() {
     let (w, h, r) = (96, 72, 0.6);
     let g = gpu();
     for estimator in [AoEstimator::Horizon, AoEstimator::Bitmask] {
-        let errors: Vec<(f32, f32)> = [(8, 1), (128, 4)]
+        // From 8 taps on one slice the error already lies at the floor of the blur and the noise
+        // (about 0.0035; each step's share takes the falloff between it and the step before), so
+        // the coarse end is 4 taps (0.0067 for `horizon`, against 0.0188 at 2).
+        let errors: Vec<(f32, f32)> = [(4, 1), (128, 4)]
             .into_iter()
             .map(|(samples, slices)| {
                 let ao = AoSettings { estimator, radius: r, samples, slices, ..Default::default() };
@@ -325,7 +328,7 @@ fn slice_estimators_converge_to_the_corner_closed_form() {
                 (abs / n as f32, bias / n as f32)
             })
             .collect();
-        eprintln!("{estimator:?}: (mean |error|, mean error) at 8 and 128 taps: {errors:?}");
+        eprintln!("{estimator:?}: (mean |error|, mean error) at 4 and 128 taps: {errors:?}");
         let ((coarse, _), (fine, bias)) = (errors[0], errors[1]);
         assert!(fine < coarse, "{estimator:?}: the error falls as taps grow ({errors:?})");
         assert!(fine <= 0.01 && bias.abs() <= 0.005, "{estimator:?}: {errors:?}");

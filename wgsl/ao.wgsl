@@ -140,13 +140,14 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
 }
 
 
-// The falloff the sectors a layer-0 point hides first take: they lie between its own direction
-// and those the nearer steps of its side hid, where the surface between the two points meets the
-// directions at distances between theirs. The surface between two steps is taken as straight:
-// the mean of the two points' falloffs (the trapezoid rule), where an earlier point of the side
-// hid sectors (`last`, else -1); the point's own falloff otherwise. With the point's own alone,
-// a step's share was counted at its own, farther distance, which under-occluded by what the
-// steps' spacing leaves between them (creases: +0.02 of mean AV on the Cornell box).
+// The falloff the sectors a layer-0 point hides first take. They lie between its own direction
+// and those of the side's nearer steps; where the surface runs on from the step before (a floor
+// into the wall it meets) it meets them at distances between the two points'. The surface
+// between two steps is taken as straight where the earlier point lies nearer the later than the
+// receiving point does (`joined`): the mean of the two falloffs (the trapezoid rule; `last`,
+// else -1: the point's own). With the point's own alone, a step's share was counted at its own,
+// farther distance: too little occlusion by what the steps' spacing leaves between them
+// (creases: +0.02 of mean AV on the Cornell box).
 fn step_falloff(falloff: f32, last: f32) -> f32 {
     return select(falloff, 0.5 * (falloff + last), last >= 0.0);
 }
@@ -172,8 +173,9 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
             let along = select(1.0, -1.0, side == 1u);
             let spacing = slice_spacing(pixel, sl, along, r_px, steps);
             let level = mip_coarsest(spacing, ao.levels);
-            // The falloff of the last layer-0 point on this side that hid sectors (-1: none).
+            // The falloff of the side's last layer-0 point (-1: none yet), and the point.
             var last = -1.0;
+            var last_y = vec3<f32>(0.0);
             for (var j = 0u; j < steps; j++) {
                 let h = spacing * (f32(j) + noise.y);
                 // Finer levels for the near steps, as `sao` reads them, never coarser than the
@@ -197,10 +199,11 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
                 var front2 = 0.0;
                 var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, ao.bias, ao.radius, &front2);
                 let falloff = max(1.0 - front2 / r2, 0.0);
-                hidden += step_falloff(falloff, last) * f32(countOneBits(bits & ~occupied));
-                if bits != 0u {
-                    last = falloff;
-                }
+                let y = view_position(frame, at, z0);
+                let joined = last >= 0.0 && length(y - last_y) < length(y - c);
+                hidden += step_falloff(falloff, select(-1.0, last, joined)) * f32(countOneBits(bits & ~occupied));
+                last = falloff;
+                last_y = y;
                 occupied |= bits;
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, ao.bias, ao.radius, &front2);

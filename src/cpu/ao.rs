@@ -52,8 +52,8 @@ pub fn ao(
 
 /// What `wgsl/ao.wgsl` reads: the frame, the settings and the depth pyramids.
 /// As `step_falloff`: the falloff the sectors a layer-0 point hides first take, the mean of its
-/// own and that of the last point of its side that hid sectors (the surface between two steps
-/// taken as straight), else its own.
+/// own and that of the side's last point where that point lies nearer it than the receiving
+/// point does (the surface between two steps taken as straight), else its own.
 fn step_falloff(own: f32, last: Option<f32>) -> f32 {
     last.map_or(own, |last| 0.5 * (own + last))
 }
@@ -139,8 +139,8 @@ impl Kernel<'_> {
             for side in [1.0, -1.0] {
                 let spacing = sl.spacing(f, (x, y), side, r_px, steps);
                 let level = mip_coarsest(spacing, self.layout);
-                // The falloff of the last layer-0 point on this side that hid sectors.
-                let mut last: Option<f32> = None;
+                // The falloff of the side's last layer-0 point, and the point.
+                let mut last: Option<(f32, Vec3)> = None;
                 for j in 0..steps {
                     let h = spacing * (j as f32 + noise.1);
                     // Finer levels for the near steps, as `sao` reads them, never coarser than
@@ -157,10 +157,12 @@ impl Kernel<'_> {
                     let (bits, front2) =
                         sl.solid_sectors(f, c, n, at, side, z0, back0, s.bias, s.radius);
                     let own = falloff(front2);
-                    hidden += step_falloff(own, last) * (bits & !occupied).count_ones() as f32;
-                    if bits != 0 {
-                        last = Some(own);
-                    }
+                    let point = view_position(f, at, z0);
+                    let joined = last
+                        .filter(|(_, p)| (point - *p).length() < (point - c).length())
+                        .map(|(f, _)| f);
+                    hidden += step_falloff(own, joined) * (bits & !occupied).count_ones() as f32;
+                    last = Some((own, point));
                     occupied |= bits;
                     if z1 > z0 {
                         let (bits, front2) =
