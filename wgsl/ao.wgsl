@@ -140,14 +140,16 @@ fn visibility(pixel: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
 }
 
 
-// The falloff the sectors a layer-0 point hides first take. They lie between its own direction
-// and those of the side's nearer steps; where the surface runs on from the step before (a floor
-// into the wall it meets) it meets them at distances between the two points'. The surface
-// between two steps is taken as straight where the earlier point lies nearer the later than the
-// receiving point does (`joined`): the mean of the two falloffs (the trapezoid rule; `last`,
-// else -1: the point's own). With the point's own alone, a step's share was counted at its own,
-// farther distance: too little occlusion by what the steps' spacing leaves between them
-// (creases: +0.02 of mean AV on the Cornell box).
+// The falloff the sectors a layer-0 point hides first take (`last`: the falloff of the side's
+// point before it where the surface is taken to run on from that one, else -1). Those sectors lie
+// between the point's direction and those of the side's nearer steps; where the surface runs on
+// from the step before (a floor into the wall it meets) it meets them at distances between the
+// two points', so they take the mean of the two falloffs (the surface between two steps taken as
+// straight: the trapezoid rule). The caller joins the two where the earlier point lies nearer the
+// later than the receiving point does (a pole in front of a wall is not joined to the wall). With
+// the point's own falloff alone, a step's share was counted at its farther distance: too little
+// occlusion by what the steps' spacing leaves between them (+0.02 of mean AV on the Cornell box,
+// along its creases).
 fn step_falloff(falloff: f32, last: f32) -> f32 {
     return select(falloff, 0.5 * (falloff + last), last >= 0.0);
 }
