@@ -231,6 +231,13 @@ fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
     return max(g.rgb, vec3<f32>(0.0));
 }
 
+// What a gather's irradiance and coverage g stand for over the whole hemisphere: E / c, pi times
+// the weighted mean radiance of the surfaces it saw (the directions it did not cover take their
+// mean; at most pi max B, so the feedback gain bounds it), 0 where it covered nothing.
+fn spread(g: vec4<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), g.rgb / max(g.a, 1e-6), g.a > 0.0);
+}
+
 // The indirect light sample s reflects every way alike (its Lambertian part) from irradiance e,
 // damped and boosted (`b`, its boost) for the next bounce, plus its emission: what its far side
 // sends.
@@ -257,12 +264,10 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     var out0 = vec3<f32>(0.0);
     var hidden0 = vec3<f32>(0.0);
     if s0.depth > 0.0 {
-        // The next bounce spreads what the gather found over the whole hemisphere: E / c, pi
-        // times the weighted mean radiance of the surfaces it saw (directions it did not cover
-        // take their mean; at most pi max B, so the feedback gain bounds it).
+        // The next bounce spreads what the gather found over the whole hemisphere.
         var valid = false;
         let h = history_at(gid.xy, s0, &valid);
-        let e = select(vec3<f32>(0.0), h.rgb / max(h.a, 1e-6), valid && h.a > 0.0);
+        let e = select(vec3<f32>(0.0), spread(h), valid);
         let b0 = boost(s0.base_color);
         hidden0 = reflected(s0, b0, e);
         out0 = b0 * diffuse0[p].rgb + hidden0;
@@ -501,10 +506,10 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
 // What the layer-1 gather keeps of its irradiance and confidence g at a point of view depth z:
 // E / c (0 where it found nothing) and z (0 where there is no point).
 fn layer1_record(g: vec4<f32>, z: f32) -> vec4<f32> {
-    if !(z > 0.0) || !(g.a > 0.0) || !finite3(g.rgb) {
+    if !(z > 0.0) || !finite3(g.rgb) {
         return vec4<f32>(0.0, 0.0, 0.0, select(0.0, z, z > 0.0));
     }
-    return vec4<f32>(g.rgb / g.a, z);
+    return vec4<f32>(spread(g), z);
 }
 
 @compute @workgroup_size(8, 8)

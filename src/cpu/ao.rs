@@ -50,7 +50,6 @@ pub fn ao(
     out
 }
 
-/// What `wgsl/ao.wgsl` reads: the frame, the settings and the depth pyramids.
 /// As `step_falloff`: the falloff the sectors a layer-0 point hides first take, the mean of its
 /// own and that of the side's last point where that point lies nearer it than the receiving
 /// point does (the surface between two steps taken as straight), else its own.
@@ -58,6 +57,7 @@ fn step_falloff(own: f32, last: Option<f32>) -> f32 {
     last.map_or(own, |last| 0.5 * (own + last))
 }
 
+/// What `wgsl/ao.wgsl` reads: the frame, the settings and the depth pyramids.
 struct Kernel<'a> {
     f: &'a FrameUniform,
     s: &'a AoSettings,

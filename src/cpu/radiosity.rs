@@ -18,6 +18,18 @@ pub fn boost(u: &RadiosityUniform, rho: Vec3) -> f32 {
     Boost { unsaturated: u.boost_unsaturated, saturated: u.boost_saturated }.of(rho.to_array())
 }
 
+/// As `reflected`: the indirect light `s` reflects every way alike from irradiance `e`, damped
+/// and boosted (`b`, its boost) for the next bounce, plus its emission (what its far side sends).
+pub fn reflected(u: &RadiosityUniform, s: &GSample, b: f32, e: Vec3) -> Vec3 {
+    b * u.damping * (1.0 - s.metallic) * s.occlusion * s.base_color / PI * e + s.emissive
+}
+
+/// As `spread`: what a gather's irradiance and coverage `g` stand for over the whole
+/// hemisphere, E / c (0 where it covered nothing).
+pub fn spread(g: Vec4) -> Vec3 {
+    if g.w > 0.0 { g.truncate() / g.w.max(1e-6) } else { Vec3::ZERO }
+}
+
 /// B of one layer without history: the boosted Lambertian part of the direct radiance
 /// (`diffuse`, [`direct_and_diffuse`](crate::cpu::direct::direct_and_diffuse)) plus emission
 /// where there is a surface.
@@ -29,11 +41,14 @@ pub fn feedback_without_history(
     layer
         .iter()
         .zip(diffuse)
-        .map(
-            |(s, d)| {
-                if s.depth > 0.0 { boost(u, s.base_color) * *d + s.emissive } else { Vec3::ZERO }
-            },
-        )
+        .map(|(s, d)| {
+            if s.depth > 0.0 {
+                let b = boost(u, s.base_color);
+                b * *d + reflected(u, s, b, Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            }
+        })
         .collect()
 }
 
@@ -231,8 +246,8 @@ impl Gather<'_> {
 /// point of view depth `z`: E / c (0 where it found nothing) and z (0 where there is no point).
 pub fn layer1_record(g: Vec4, z: f32) -> Vec4 {
     let z = if z > 0.0 { z } else { 0.0 };
-    if z == 0.0 || g.w.is_nan() || g.w <= 0.0 || !g.truncate().is_finite() {
+    if z == 0.0 || !g.truncate().is_finite() {
         return Vec4::new(0.0, 0.0, 0.0, z);
     }
-    (g.truncate() / g.w).extend(z)
+    spread(g).extend(z)
 }

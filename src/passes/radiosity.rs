@@ -177,7 +177,19 @@ impl Stage for RadiosityStage {
             pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
         };
         let level = ("LEVEL", f64::from(self.level));
-        let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
+        // The gather at the points of layer `receiver`, at the texels of the gather's level.
+        let gather = |pass: &mut wgpu::ComputePass<'_>, entries: &[_], receiver: u8| {
+            let constants = [level, ("RECEIVER", f64::from(receiver))];
+            let pipeline = ctx.pipelines.get(
+                ctx.device,
+                "radiosity",
+                "radiosity_gather",
+                &defines,
+                &constants,
+            );
+            let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
+            pipeline.dispatch_pixels(ctx.device, pass, entries, size);
+        };
         match id {
             PassId::Radiosity => {
                 let bounce = ("LAYER1_BOUNCE", f64::from(u8::from(self.layer1_bounce)));
@@ -194,33 +206,19 @@ impl Stage for RadiosityStage {
                         (level.width, level.height),
                     );
                 }
-                let pipeline = ctx.pipelines.get(
-                    ctx.device,
-                    "radiosity",
-                    "radiosity_gather",
-                    &defines,
-                    &[level],
-                );
                 // At a lower resolution the gather writes its own buffer, upsampled into `raw`.
                 let target = self.low.as_ref().unwrap_or(&self.gathered);
-                let gather = entries.map(|(s, b)| (s, if s == slot::RAW { target } else { b }));
-                pipeline.dispatch_pixels(ctx.device, &mut pass, &gather, size);
+                gather(
+                    &mut pass,
+                    &entries.map(|(s, b)| (s, if s == slot::RAW { target } else { b })),
+                    0,
+                );
                 if let Some(low) = &self.low {
                     let upsample = Upsample { level: self.level, vec4: true, empty: 0.0 };
                     upsample.record(ctx, &mut pass, [low, &self.gathered]);
                 }
             }
-            PassId::RadiosityLayer1 => {
-                let constants = [level, ("RECEIVER", 1.0)];
-                let pipeline = ctx.pipelines.get(
-                    ctx.device,
-                    "radiosity",
-                    "radiosity_gather",
-                    &defines,
-                    &constants,
-                );
-                pipeline.dispatch_pixels(ctx.device, &mut pass, &entries, size);
-            }
+            PassId::RadiosityLayer1 => gather(&mut pass, &entries, 1),
             PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal", &[]),
             PassId::RadiosityBlur => {
                 let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
