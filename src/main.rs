@@ -99,6 +99,9 @@ struct SweepArgs {
     /// Radiosity tap counts to sweep.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_samples))]
     radiosity_samples: Vec<u32>,
+    /// Radiosity slice counts to sweep (`slices` gather; the taps are shared among them).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_slices))]
+    radiosity_slices: Vec<u32>,
     /// Layer-1 gather tap counts to sweep (0: none).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_layer1_samples))]
     radiosity_layer1_samples: Vec<u32>,
@@ -841,6 +844,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_slices: args.ao_slices,
         ao_samples: args.ao_samples,
         radiosity_samples: args.radiosity_samples,
+        radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,
         layers: args.layers,
         precision: args.precision,

@@ -47,6 +47,8 @@ pub struct Knobs {
     pub ao_samples: u32,
     /// Radiosity taps per pixel.
     pub radiosity_samples: u32,
+    /// Radiosity slices per pixel (`slices` gather; its taps shared among them).
+    pub radiosity_slices: u32,
     /// Taps per layer-1 point of the layer-1 gather ([`RadiositySettings::layer1_samples`];
     /// 0: none).
     pub radiosity_layer1_samples: u32,
@@ -117,6 +119,7 @@ impl Knobs {
             motion_blur: MotionBlurSettings { shutter: self.shutter, ..base.motion_blur.clone() },
             radiosity: RadiositySettings {
                 samples: self.radiosity_samples,
+                slices: self.radiosity_slices,
                 layer1_samples: self.radiosity_layer1_samples,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
@@ -167,6 +170,8 @@ pub struct Grid {
     pub ao_samples: Vec<u32>,
     /// Radiosity taps.
     pub radiosity_samples: Vec<u32>,
+    /// Radiosity slices.
+    pub radiosity_slices: Vec<u32>,
     /// Layer-1 gather taps.
     pub radiosity_layer1_samples: Vec<u32>,
     /// Layer counts.
@@ -213,6 +218,7 @@ impl Default for Grid {
             ao_slices: vec![settings.ao.slices],
             ao_samples: vec![4, 8, 16, 32, 64],
             radiosity_samples: vec![5, 9, 13, 19, 27],
+            radiosity_slices: vec![settings.radiosity.slices],
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
@@ -255,6 +261,7 @@ impl Grid {
             ao_slices: settings.ao.slices,
             ao_samples: settings.ao.samples,
             radiosity_samples: settings.radiosity.samples,
+            radiosity_slices: settings.radiosity.slices,
             radiosity_layer1_samples: settings.radiosity.layer1_samples,
             layers: 2,
             precision: settings.precision,
@@ -290,6 +297,7 @@ impl Grid {
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
         let k = times(k, &self.ao_slices, |k, v| k.ao_slices = v);
         let k = times(k, &self.ao_samples, |k, v| k.ao_samples = v);
+        let k = times(k, &self.radiosity_slices, |k, v| k.radiosity_slices = v);
         times(k, &self.radiosity_samples, |k, v| k.radiosity_samples = v)
     }
 }
@@ -596,7 +604,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -617,11 +625,12 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
             k.radiosity_samples,
+            k.radiosity_slices,
             k.radiosity_layer1_samples,
             k.layers,
             k.precision,
@@ -683,9 +692,10 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 16] = [
+    let optional: [Column; 17] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
+        ("radiosity slices", |k| k.radiosity_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("position", |k| k.position.name().to_string()),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
@@ -913,13 +923,21 @@ mod tests {
             ao_samples: vec![8],
             radiosity_samples: vec![9],
             radiosity_layer1_samples: vec![0, 4],
+            radiosity_slices: vec![1, 4],
             base,
             ..Grid::default()
         };
         let configurations = grid.configurations();
-        let layer1: Vec<u32> =
-            configurations.iter().map(|k| k.settings(64, 48).radiosity.layer1_samples).collect();
-        assert!(layer1.contains(&0) && layer1.contains(&4), "{layer1:?}");
+        // The default grid's two estimators and two layer counts, times the two knobs here.
+        assert_eq!(configurations.len(), 2 * 2 * 2 * 2);
+        let knobs: Vec<(u32, u32)> = configurations
+            .iter()
+            .map(|k| k.settings(64, 48).radiosity)
+            .map(|r| (r.layer1_samples, r.slices))
+            .collect();
+        for pair in [(0, 1), (0, 4), (4, 1), (4, 4)] {
+            assert!(knobs.contains(&pair), "{pair:?} missing from {knobs:?}");
+        }
         for k in configurations {
             let s = k.settings(64, 48);
             assert_eq!((s.width, s.height, s.ao.samples, s.radiosity.samples), (64, 48, 8, 9));
