@@ -35,10 +35,10 @@ enum Command {
     /// Print the adapter, backend, driver, features and the active raster path.
     Info,
     /// Ground truth by ray tracing on the CPU, optionally compared with the GPU's estimate.
-    Truth(TruthArgs),
+    Truth(Box<TruthArgs>),
     /// Render a grid of accuracy settings, time every pass and measure each effect's error
     /// against ground truth: sweep.csv, sweep.md and pareto.png.
-    Sweep(SweepArgs),
+    Sweep(Box<SweepArgs>),
 }
 
 /// What a scene file may make the loaders allocate (`deep_gbuffer::scene::Limits`).
@@ -1243,8 +1243,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render(&cli.adapter, *args),
         Command::Info => info(&cli.adapter),
-        Command::Truth(args) => truth(&cli.adapter, args),
-        Command::Sweep(args) => sweep(&cli.adapter, args),
+        Command::Truth(args) => truth(&cli.adapter, *args),
+        Command::Sweep(args) => sweep(&cli.adapter, *args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
