@@ -776,13 +776,15 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
             println!("gpu image: SSIM {ssim:.4} against the truth (tone-mapped luminance)");
         }
         println!(
-            "gpu {what}: rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}, mean {:.4} vs truth {:.4}); {} {:.3} ms on {}",
+            "gpu {what}: rmse {:.4}, mae {:.4} over {} pixels (truth noise {:.4}, mean {:.4} vs truth {:.4}, ratio {:.3}; median relative error {:+.3} where the truth exceeds a tenth of its mean); {} {:.3} ms on {}",
             stats.rmse,
             stats.mae,
             stats.pixels,
             stats.truth_stderr,
             stats.estimate_mean,
             stats.truth_mean,
+            stats.estimate_mean / stats.truth_mean,
+            stats.median_relative,
             passes.join(" + "),
             ms,
             gpu.describe()

@@ -619,7 +619,9 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         &["ao", "indirect", "image"]
     };
     for e in effects {
-        out += &format!(",{e}_rmse,{e}_mae,{e}_truth_stderr,{e}_truth_mean,{e}_instability");
+        out += &format!(
+            ",{e}_rmse,{e}_mae,{e}_truth_stderr,{e}_truth_mean,{e}_estimate_mean,{e}_median_rel,{e}_instability"
+        );
     }
     out += ",image_ssim\n";
     for r in rows {
@@ -668,8 +670,14 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
         stats.push((r.full, i.image));
         for (e, flicker) in stats {
             out += &format!(
-                ",{:.5},{:.5},{:.5},{:.5},{:.5}",
-                e.rmse, e.mae, e.truth_stderr, e.truth_mean, flicker
+                ",{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5}",
+                e.rmse,
+                e.mae,
+                e.truth_stderr,
+                e.truth_mean,
+                e.estimate_mean,
+                e.median_relative,
+                flicker
             );
         }
         out += &format!(",{:.4}\n", r.ssim);

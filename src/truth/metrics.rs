@@ -19,6 +19,11 @@ pub struct ErrorStats {
     pub truth_mean: f32,
     /// Mean of the estimate over those pixels (its bias shows against `truth_mean`).
     pub estimate_mean: f32,
+    /// The median of the per-pixel relative error `estimate / truth - 1` (channel means) over
+    /// the pixels whose truth exceeds a tenth of `truth_mean`: how far a typical lit pixel is
+    /// off, which the means hide where a few bright pixels carry the light (the upper median
+    /// for an even count; NaN where no pixel qualifies).
+    pub median_relative: f32,
 }
 
 /// Compares `estimate` (one value per pixel, rgb) with `truth` over the pixels where the truth
@@ -26,6 +31,8 @@ pub struct ErrorStats {
 pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorStats {
     let (mut sq, mut abs, mut se, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     let (mut tm, mut em) = (0.0f64, 0.0f64);
+    // Each compared pixel's (estimate, truth) channel means, for the median.
+    let mut pairs = Vec::new();
     for (((e, m), (t, s)), v) in
         estimate.iter().zip(mask).zip(truth.value.iter().zip(&truth.stderr)).zip(&truth.visible)
     {
@@ -36,14 +43,25 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         sq += d.length_squared() / 3.0;
         abs += d.abs().element_sum() / 3.0;
         se += f64::from(s.element_sum()) / 3.0;
-        tm += f64::from(t.element_sum()) / 3.0;
-        em += f64::from(e.element_sum()) / 3.0;
+        let (te, ee) = (f64::from(t.element_sum()) / 3.0, f64::from(e.element_sum()) / 3.0);
+        tm += te;
+        em += ee;
+        pairs.push((ee, te));
         n += 1;
     }
     if n == 0 {
         return ErrorStats::default();
     }
     let n_f = n as f64;
+    let floor = 0.1 * tm / n_f;
+    let mut relative: Vec<f64> =
+        pairs.iter().filter(|(_, t)| *t > floor).map(|(e, t)| e / t - 1.0).collect();
+    let median_relative = if relative.is_empty() {
+        f32::NAN
+    } else {
+        let middle = relative.len() / 2;
+        *relative.select_nth_unstable_by(middle, f64::total_cmp).1 as f32
+    };
     ErrorStats {
         rmse: (sq / n_f).sqrt() as f32,
         mae: (abs / n_f) as f32,
@@ -51,6 +69,7 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         truth_stderr: (se / n_f) as f32,
         truth_mean: (tm / n_f) as f32,
         estimate_mean: (em / n_f) as f32,
+        median_relative,
     }
 }
 
@@ -140,4 +159,31 @@ pub fn temporal_change(
         }
     }
     if n == 0 { (0.0, 0) } else { ((sum / n as f64) as f32, n) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The median relative error skips the pixels under a tenth of the truth's mean (here the
+    /// last, which the estimate overshoots fivefold) and the ones the masks leave out.
+    #[test]
+    fn the_median_relative_error_counts_the_lit_pixels() {
+        let truth = TruthImage {
+            width: 6,
+            height: 1,
+            value: [1.0, 2.0, 1.0, 1.0, 1.0, 0.01].map(Vec3::splat).to_vec(),
+            stderr: vec![Vec3::ZERO; 6],
+            visible: vec![true, true, true, true, false, true],
+        };
+        let estimate = [1.1, 1.6, 1.0, 9.0, 9.0, 0.05].map(Vec3::splat).to_vec();
+        let mask = [true, true, true, false, true, true];
+        let stats = compare(&estimate, &mask, &truth);
+        assert_eq!(stats.pixels, 4);
+        // Relative errors +0.1, -0.2, 0 (the fourth and fifth pixels masked, the sixth dim).
+        assert!(stats.median_relative.abs() < 1e-6, "{}", stats.median_relative);
+        assert!((stats.truth_mean - 1.0025).abs() < 1e-5);
+        let dark = TruthImage { value: vec![Vec3::ZERO; 6], ..truth };
+        assert!(compare(&estimate, &mask, &dark).median_relative.is_nan());
+    }
 }
