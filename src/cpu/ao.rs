@@ -142,7 +142,7 @@ impl Kernel<'_> {
                 // The falloff of the side's last layer-0 point, and the point.
                 let mut last: Option<(f32, Vec3)> = None;
                 for j in 0..steps {
-                    let h = spacing * (j as f32 + noise.1);
+                    let h = step_distance(spacing, j, steps, noise.1);
                     // Finer levels for the near steps, as `sao` reads them, never coarser than
                     // the step spacing.
                     let step_level = self.tap_level(h, level);
@@ -176,4 +176,11 @@ impl Kernel<'_> {
         }
         (1.0 - s.intensity * total / slices as f32).clamp(0.0, 1.0)
     }
+}
+
+/// As `step_distance`: step j of `steps` along a side whose even spacing is `spacing`, at
+/// t^1.5 of the side's reach (t = (j + jitter) / steps), crowded towards the point.
+pub fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
+    let t = (j as f32 + jitter) / steps as f32;
+    spacing * steps as f32 * t * t.sqrt()
 }
