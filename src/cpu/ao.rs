@@ -184,3 +184,30 @@ pub fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
     let t = (j as f32 + jitter) / steps as f32;
     spacing * steps as f32 * t * t.sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::step_distance;
+
+    /// The steps stay in order within the side's reach, crowd towards the point (each gap at
+    /// least the one before it) and reach it as the jitter approaches 1; an even spread would
+    /// put step j at (j + jitter) spacings.
+    #[test]
+    fn steps_crowd_towards_the_point_within_the_reach() {
+        let (spacing, steps) = (3.0f32, 8u32);
+        for jitter in [0.0f32, 0.25, 0.5, 0.999] {
+            let h: Vec<f32> =
+                (0..steps).map(|j| step_distance(spacing, j, steps, jitter)).collect();
+            assert!(h[0] >= 0.0 && h[steps as usize - 1] <= spacing * steps as f32);
+            for w in h.windows(3) {
+                assert!(w[1] - w[0] <= w[2] - w[1] + 1e-5, "{h:?}");
+            }
+            // The first step lies nearer than an even spread puts it (past the very start).
+            if jitter > 0.0 {
+                assert!(h[0] < spacing * jitter, "{h:?}");
+            }
+        }
+        let last = step_distance(spacing, steps - 1, steps, 0.999_999);
+        assert!((last - spacing * steps as f32).abs() < 1e-3, "{last}");
+    }
+}
