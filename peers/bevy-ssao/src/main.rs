@@ -1,17 +1,20 @@
 //! Times Bevy's screen-space ambient occlusion (its `ssao` span: depth preprocess, GTAO and
-//! spatial denoise) on an OBJ scene, headless, by Bevy's own GPU timestamps, from the camera
-//! deep-gbuffer's `builtin:cornell` uses (eye 0,1,3.8, target 0,1,0, vertical field of view
-//! 39.3 degrees). Bevy's effect radius is fixed at 0.5 x 1.457 world units; its `High` quality
-//! takes 3 slices of 3 steps a side (18 taps).
+//! spatial denoise) on an OBJ or glTF scene, headless, by Bevy's own GPU timestamps. Bevy's
+//! effect radius is fixed at 0.5 x 1.457 world units; its `High` quality takes 3 slices of 3
+//! steps a side (18 taps).
 //!
-//! Usage: `bevy-ssao-peer OBJ WIDTH HEIGHT FRAMES`; prints, for every GPU span Bevy measured,
-//! the median over the frames it recorded (the first frames, which compile pipelines, are in
-//! Bevy's history only once it has them).
+//! Usage: `bevy-ssao-peer SCENE WIDTH HEIGHT FRAMES [EYE TARGET UP FOV_DEG SCALE]`, the vectors
+//! as `x,y,z`. The camera defaults to the one deep-gbuffer's `builtin:cornell` uses (eye
+//! 0,1,3.8, target 0,1,0, up +y, 39.3 degrees vertically); SCALE multiplies the scene and the
+//! camera's position (Bevy's radius is fixed, so a scene is scaled to it instead). A glTF's own
+//! cameras and lights are not loaded. Prints, for every GPU span Bevy measured, the median over
+//! the frames it recorded.
 use bevy::{
     app::{AppExit, ScheduleRunnerPlugin},
     asset::RenderAssetUsages,
     camera::RenderTarget,
     diagnostic::DiagnosticsStore,
+    gltf::GltfLoaderSettings,
     mesh::{Indices, PrimitiveTopology},
     pbr::{ScreenSpaceAmbientOcclusion, ScreenSpaceAmbientOcclusionQualityLevel},
     prelude::*,
@@ -22,7 +25,12 @@ use std::time::Duration;
 
 #[derive(Resource)]
 struct Config {
-    obj: String,
+    scene: String,
+    eye: Vec3,
+    target: Vec3,
+    up: Vec3,
+    fov_deg: f32,
+    scale: f32,
     width: u32,
     height: u32,
     frames: u32,
@@ -31,10 +39,27 @@ struct Config {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    if args.len() != 5 {
-        eprintln!("usage: bevy-ssao-peer OBJ WIDTH HEIGHT FRAMES");
+    if args.len() != 5 && args.len() != 10 {
+        eprintln!("usage: bevy-ssao-peer SCENE WIDTH HEIGHT FRAMES [EYE TARGET UP FOV_DEG SCALE]");
         std::process::exit(2);
     }
+    let real = |i: usize| -> f32 {
+        args[i].parse().unwrap_or_else(|_| {
+            eprintln!("not a number: {}", args[i]);
+            std::process::exit(2)
+        })
+    };
+    let vector = |i: usize| -> Vec3 {
+        let v: Vec<f32> = args[i].split(',').filter_map(|x| x.parse().ok()).collect();
+        match v[..] {
+            [x, y, z] => Vec3::new(x, y, z),
+            _ => {
+                eprintln!("not x,y,z: {}", args[i]);
+                std::process::exit(2)
+            }
+        }
+    };
+    let given = args.len() == 10;
     let number = |i: usize| -> u32 {
         args[i].parse().unwrap_or_else(|_| {
             eprintln!("not a whole number: {}", args[i]);
@@ -42,19 +67,37 @@ fn main() {
         })
     };
     let config = Config {
-        obj: args[1].clone(),
+        scene: args[1].clone(),
+        eye: if given { vector(5) } else { Vec3::new(0.0, 1.0, 3.8) },
+        target: if given { vector(6) } else { Vec3::new(0.0, 1.0, 0.0) },
+        up: if given { vector(7) } else { Vec3::Y },
+        fov_deg: if given { real(8) } else { 39.3 },
+        scale: if given { real(9) } else { 1.0 },
         width: number(2),
         height: number(3),
         frames: number(4),
         done: 0,
     };
+    // Assets load from the scene's folder.
+    let folder = std::fs::canonicalize(&config.scene)
+        .unwrap_or_else(|e| {
+            eprintln!("{}: {e}", config.scene);
+            std::process::exit(2)
+        })
+        .parent()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
     App::new()
         .insert_resource(config)
-        .add_plugins(DefaultPlugins.set(WindowPlugin {
-            primary_window: None,
-            exit_condition: ExitCondition::DontExit,
-            ..default()
-        }))
+        .add_plugins(
+            DefaultPlugins
+                .set(WindowPlugin {
+                    primary_window: None,
+                    exit_condition: ExitCondition::DontExit,
+                    ..default()
+                })
+                .set(AssetPlugin { file_path: folder, ..default() }),
+        )
         .add_plugins(RenderDiagnosticsPlugin)
         .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO))
         .add_systems(Startup, setup)
@@ -108,6 +151,7 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
     mut images: ResMut<Assets<Image>>,
+    assets: Res<AssetServer>,
     config: Res<Config>,
 ) {
     let target = images.add(Image::new_target_texture(
@@ -116,25 +160,40 @@ fn setup(
         TextureFormat::Rgba8UnormSrgb,
         None,
     ));
-    commands.spawn((
-        Mesh3d(meshes.add(load_obj(&config.obj))),
-        MeshMaterial3d(materials.add(StandardMaterial {
-            base_color: Color::srgb(0.7, 0.7, 0.7),
-            cull_mode: None,
-            double_sided: true,
-            ..default()
-        })),
-    ));
+    let scaled = Transform::from_scale(Vec3::splat(config.scale));
+    if config.scene.ends_with(".gltf") || config.scene.ends_with(".glb") {
+        let file = std::path::Path::new(&config.scene).file_name().unwrap().to_string_lossy();
+        let scene = assets
+            .load_builder()
+            .with_settings(|s: &mut GltfLoaderSettings| {
+                s.load_cameras = false;
+                s.load_lights = false;
+            })
+            .load(GltfAssetLabel::Scene(0).from_asset(file.to_string()));
+        commands.spawn((WorldAssetRoot(scene), scaled));
+    } else {
+        commands.spawn((
+            Mesh3d(meshes.add(load_obj(&config.scene))),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgb(0.7, 0.7, 0.7),
+                cull_mode: None,
+                double_sided: true,
+                ..default()
+            })),
+            scaled,
+        ));
+    }
     commands.insert_resource(GlobalAmbientLight { brightness: 500.0, ..default() });
     commands.spawn((
         Camera3d::default(),
         RenderTarget::Image(target.into()),
         Projection::Perspective(PerspectiveProjection {
-            fov: 39.3f32.to_radians(),
-            near: 0.1,
+            fov: config.fov_deg.to_radians(),
+            near: 0.1 * config.scale.min(1.0),
             ..default()
         }),
-        Transform::from_xyz(0.0, 1.0, 3.8).looking_at(Vec3::new(0.0, 1.0, 0.0), Vec3::Y),
+        Transform::from_translation(config.eye * config.scale)
+            .looking_at(config.target * config.scale, config.up),
         Msaa::Off,
         ScreenSpaceAmbientOcclusion {
             quality_level: ScreenSpaceAmbientOcclusionQualityLevel::High,
