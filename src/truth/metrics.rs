@@ -43,14 +43,15 @@ pub fn compare(estimate: &[Vec3], mask: &[bool], truth: &TruthImage) -> ErrorSta
         sq += d.length_squared() / 3.0;
         abs += d.abs().element_sum() / 3.0;
         se += f64::from(s.element_sum()) / 3.0;
-        let (te, ee) = (f64::from(t.element_sum()) / 3.0, f64::from(e.element_sum()) / 3.0);
-        tm += te;
-        em += ee;
-        pairs.push((ee, te));
+        let truth_mean = f64::from(t.element_sum()) / 3.0;
+        let estimate_mean = f64::from(e.element_sum()) / 3.0;
+        tm += truth_mean;
+        em += estimate_mean;
+        pairs.push((estimate_mean, truth_mean));
         n += 1;
     }
     if n == 0 {
-        return ErrorStats::default();
+        return ErrorStats { median_relative: f32::NAN, ..ErrorStats::default() };
     }
     let n_f = n as f64;
     let floor = 0.1 * tm / n_f;
@@ -183,7 +184,10 @@ mod tests {
         // Relative errors +0.1, -0.2, 0 (the fourth and fifth pixels masked, the sixth dim).
         assert!(stats.median_relative.abs() < 1e-6, "{}", stats.median_relative);
         assert!((stats.truth_mean - 1.0025).abs() < 1e-5);
-        let dark = TruthImage { value: vec![Vec3::ZERO; 6], ..truth };
+        let dark = TruthImage { value: vec![Vec3::ZERO; 6], ..truth.clone() };
         assert!(compare(&estimate, &mask, &dark).median_relative.is_nan());
+        let none = compare(&estimate, &[false; 6], &truth);
+        assert_eq!(none.pixels, 0);
+        assert!(none.median_relative.is_nan());
     }
 }
