@@ -9,8 +9,8 @@ use deep_gbuffer::cpu::radiosity as cpu;
 use deep_gbuffer::frame::{PyramidLayout, RadiosityUniform, SourceTexel, pack_rgb9e5};
 use deep_gbuffer::settings::downsample_level;
 use deep_gbuffer::{
-    Boost, Normalization, RadiosityEstimator, RadiositySettings, Renderer, Scene, SceneBuffers,
-    Settings,
+    Boost, Camera, Normalization, RadiosityEstimator, RadiositySettings, Renderer, Scene,
+    SceneBuffers, Settings,
 };
 use glam::Vec4;
 
@@ -228,6 +228,12 @@ fn first_frame_matches(
     raw
 }
 
+/// The Cornell box's camera and its scene uploaded to the test device.
+fn cornell_uploaded() -> (Camera, SceneBuffers) {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    (scene.camera_or_default(), SceneBuffers::upload(&gpu().device, &scene).unwrap())
+}
+
 /// The next frame's layer 1 reflects what the layer-1 gather found at its point: B1 = boost D1 +
 /// boost delta (1 - metallic) rho / pi E1 + Le1 and H1 its reflected part, E1 the last frame's
 /// layer-1 record where the point is the same (a static camera: everywhere). Without the layer-1
@@ -235,9 +241,7 @@ fn first_frame_matches(
 #[test]
 fn layer1_reflects_the_last_frames_layer1_gather() {
     let g = gpu();
-    let scene = Scene::from_spec("builtin:cornell").unwrap();
-    let camera = scene.camera_or_default();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let (camera, buffers) = cornell_uploaded();
     for layer1_samples in [8, 0] {
         let radiosity = RadiositySettings { layer1_samples, ..Default::default() };
         let s = Settings { radiosity: radiosity.clone(), ..settings(64, 48) };
@@ -296,9 +300,7 @@ fn layer1_reflects_the_last_frames_layer1_gather() {
 #[test]
 fn a_static_camera_converges_and_a_cut_resets() {
     let g = gpu();
-    let scene = Scene::from_spec("builtin:cornell").unwrap();
-    let camera = scene.camera_or_default();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let (camera, buffers) = cornell_uploaded();
     let radiosity = deep_gbuffer::RadiositySettings { jitter: false, ..Default::default() };
     let shadows = deep_gbuffer::ShadowSettings { enabled: false, ..Default::default() };
     let mut renderer =

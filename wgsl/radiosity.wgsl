@@ -506,10 +506,10 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
 // What the layer-1 gather keeps of its irradiance and confidence g at a point of view depth z:
 // E / c (0 where it found nothing) and z (0 where there is no point).
 fn layer1_record(g: vec4<f32>, z: f32) -> vec4<f32> {
-    if !(z > 0.0) || !finite3(g.rgb) {
-        return vec4<f32>(0.0, 0.0, 0.0, select(0.0, z, z > 0.0));
+    if !(z > 0.0) {
+        return vec4<f32>(0.0);
     }
-    return vec4<f32>(spread(g), z);
+    return vec4<f32>(select(vec3<f32>(0.0), spread(g), finite3(g.rgb)), z);
 }
 
 @compute @workgroup_size(8, 8)

@@ -245,9 +245,10 @@ impl Gather<'_> {
 /// As `layer1_record`: what the layer-1 gather keeps of its irradiance and confidence `g` at a
 /// point of view depth `z`: E / c (0 where it found nothing) and z (0 where there is no point).
 pub fn layer1_record(g: Vec4, z: f32) -> Vec4 {
-    let z = if z > 0.0 { z } else { 0.0 };
-    if z == 0.0 || !g.truncate().is_finite() {
-        return Vec4::new(0.0, 0.0, 0.0, z);
+    // NaN depths fail the test too.
+    if z.is_nan() || z <= 0.0 {
+        return Vec4::ZERO;
     }
-    spread(g).extend(z)
+    let e = if g.truncate().is_finite() { spread(g) } else { Vec3::ZERO };
+    e.extend(z)
 }

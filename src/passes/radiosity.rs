@@ -172,28 +172,26 @@ impl Stage for RadiosityStage {
         if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
             defines.push("SLICES");
         }
-        let run = |pass: &mut wgpu::ComputePass<'_>, entry, constants: &[(&'static str, f64)]| {
+        // One entry point of wgsl/radiosity.wgsl over `size` texels.
+        let dispatch = |pass: &mut wgpu::ComputePass<'_>,
+                        entry,
+                        entries: &[_],
+                        constants: &[(&'static str, f64)],
+                        size| {
             let pipeline = ctx.pipelines.get(ctx.device, "radiosity", entry, &defines, constants);
-            pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size());
+            pipeline.dispatch_pixels(ctx.device, pass, entries, size);
         };
         let level = ("LEVEL", f64::from(self.level));
+        let gather_size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
         // The gather at the points of layer `receiver`, at the texels of the gather's level.
         let gather = |pass: &mut wgpu::ComputePass<'_>, entries: &[_], receiver: u8| {
             let constants = [level, ("RECEIVER", f64::from(receiver))];
-            let pipeline = ctx.pipelines.get(
-                ctx.device,
-                "radiosity",
-                "radiosity_gather",
-                &defines,
-                &constants,
-            );
-            let size = mip_size(ctx.settings.width, ctx.settings.height, self.level as usize);
-            pipeline.dispatch_pixels(ctx.device, pass, entries, size);
+            dispatch(pass, "radiosity_gather", entries, &constants, gather_size);
         };
         match id {
             PassId::Radiosity => {
                 let bounce = ("LAYER1_BOUNCE", f64::from(u8::from(self.layer1_bounce)));
-                run(&mut pass, "radiosity_feedback", &[level, bounce]);
+                dispatch(&mut pass, "radiosity_feedback", &entries, &[level, bounce], ctx.size());
                 let pipeline =
                     ctx.pipelines.get(ctx.device, "radiosity", "radiosity_source_level", &[], &[]);
                 for (i, level) in self.levels.layout().levels.iter().enumerate().skip(1) {
@@ -219,7 +217,9 @@ impl Stage for RadiosityStage {
                 }
             }
             PassId::RadiosityLayer1 => gather(&mut pass, &entries, 1),
-            PassId::RadiosityTemporal => run(&mut pass, "radiosity_temporal", &[]),
+            PassId::RadiosityTemporal => {
+                dispatch(&mut pass, "radiosity_temporal", &entries, &[], ctx.size());
+            }
             PassId::RadiosityBlur => {
                 let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
                 blur.record(ctx, &mut pass, [history_out, &self.scratch, &self.blurred]);
