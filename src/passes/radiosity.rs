@@ -60,8 +60,11 @@ pub(crate) struct RadiosityStage {
     turn: u32,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
-    /// The layer-1 gather, made by the first frame that runs it.
+    /// The layer-1 gather, made by the first frame that runs it, and the list of the texels it
+    /// runs at (with its indirect dispatch arguments).
     layer1: Option<wgpu::Buffer>,
+    layer1_points: Option<wgpu::Buffer>,
+    layer1_args: Option<wgpu::Buffer>,
     /// Whether the last frame ran the layer-1 gather (the next one's feedback reads it).
     layer1_written: bool,
     /// Whether this frame's feedback reads the last frame's layer-1 gather.
@@ -100,6 +103,8 @@ impl RadiosityStage {
             scratch: buffer("deep-gbuffer.radiosity.blur"),
             blurred: buffer("deep-gbuffer.radiosity.blurred"),
             layer1: None,
+            layer1_points: None,
+            layer1_args: None,
             layer1_written: false,
             layer1_bounce: false,
         }
@@ -125,6 +130,19 @@ impl RadiosityStage {
                 "deep-gbuffer.radiosity.layer1",
                 u64::from(w) * u64::from(h) * 16,
                 wgpu::BufferUsages::empty(),
+            ));
+            // Four words of counts, then a texel index each.
+            self.layer1_points = Some(gpu::storage_buffer(
+                device,
+                "deep-gbuffer.radiosity.layer1_points",
+                (4 + u64::from(w) * u64::from(h)) * 4,
+                wgpu::BufferUsages::empty(),
+            ));
+            self.layer1_args = Some(gpu::storage_buffer(
+                device,
+                "deep-gbuffer.radiosity.layer1_args",
+                16,
+                wgpu::BufferUsages::INDIRECT,
             ));
         }
         self.current = 1 - self.current;
@@ -167,6 +185,8 @@ impl Stage for RadiosityStage {
             // Only the passes that use the layer-1 gather read or write it; the blur's
             // scratch (unused here) stands in for it elsewhere.
             (slot::LAYER1_GATHERED, self.layer1.as_ref().unwrap_or(&self.scratch)),
+            (slot::LAYER1_POINTS, self.layer1_points.as_ref().unwrap_or(&self.scratch)),
+            (slot::LAYER1_ARGS, self.layer1_args.as_ref().unwrap_or(&self.scratch)),
         ];
         let mut defines = ctx.settings.precision.defines();
         if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
@@ -216,7 +236,18 @@ impl Stage for RadiosityStage {
                     upsample.record(ctx, &mut pass, [low, &self.gathered]);
                 }
             }
-            PassId::RadiosityLayer1 => gather(&mut pass, &entries, 1),
+            PassId::RadiosityLayer1 => {
+                // The gather runs at the texels that hold a layer-1 point only, listed first.
+                let args = self.layer1_args.as_ref().expect("made with the layer-1 gather");
+                dispatch(&mut pass, "radiosity_layer1_list", &entries, &[level], gather_size);
+                ctx.pipelines
+                    .get(ctx.device, "radiosity", "radiosity_layer1_dispatch", &[], &[])
+                    .dispatch(ctx.device, &mut pass, &entries, (1, 1));
+                let constants = [level, ("RECEIVER", 1.0)];
+                ctx.pipelines
+                    .get(ctx.device, "radiosity", "radiosity_gather_listed", &defines, &constants)
+                    .dispatch_indirect(ctx.device, &mut pass, &entries, args, 0);
+            }
             PassId::RadiosityTemporal => {
                 dispatch(&mut pass, "radiosity_temporal", &entries, &[], ctx.size());
             }
