@@ -295,6 +295,37 @@ fn layer1_reflects_the_last_frames_layer1_gather() {
     }
 }
 
+/// The layer-1 gather runs at the texels that hold a layer-1 point: after the camera moves, the
+/// texels whose pixel held one on the last frame and holds none now read 0 (the next frame's
+/// feedback must not find the old point's light there), and every texel that holds one reads
+/// its point's depth.
+#[test]
+fn the_layer1_gather_follows_the_points_of_layer1() {
+    let g = gpu();
+    let (camera, buffers) = cornell_uploaded();
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings(64, 48)).unwrap();
+    let moved =
+        deep_gbuffer::Camera { eye: camera.eye + glam::Vec3::new(0.6, -0.3, 0.4), ..camera };
+    // Pixels that held a layer-1 point on the frame before and hold none now.
+    let (mut before, mut emptied) = (Vec::new(), 0);
+    for (frame, camera) in [camera.clone(), moved, camera].iter().enumerate() {
+        renderer.render(&g.device, &g.queue, &buffers, camera).unwrap();
+        let layer1 = renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap().samples;
+        let record = read4(&renderer, renderer.radiosity_buffers().unwrap().layer1.unwrap());
+        for (p, s1) in layer1.iter().enumerate() {
+            let depth = if s1.depth > 0.0 { s1.depth } else { 0.0 };
+            assert_eq!(record[p].w, depth, "frame {frame}, pixel {p}: {}", record[p]);
+            if depth == 0.0 {
+                assert_eq!(record[p], Vec4::ZERO, "frame {frame}, pixel {p}");
+            }
+        }
+        let held: Vec<bool> = layer1.iter().map(|s| s.depth > 0.0).collect();
+        emptied += before.iter().zip(&held).filter(|&(b, h)| *b && !*h).count();
+        before = held;
+    }
+    assert!(emptied > 0, "no pixel lost its layer-1 point between frames");
+}
+
 /// On a static camera, with the spiral held still, the multi-bounce feedback and the temporal
 /// filter converge to a fixed point: the frame-to-frame change dies away.
 #[test]
