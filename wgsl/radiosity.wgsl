@@ -54,7 +54,7 @@
 //   next frame's feedback only, E / c (the light found spread over the whole hemisphere, as the
 //   feedback spreads layer 0's) and the point's view depth, by which the next frame tells that
 //   its reprojected layer-1 point is the same. It runs at the texels that hold a layer-1 point
-//   only: radiosity_layer1_list lists them (and clears the others), radiosity_layer1_dispatch
+//   only: radiosity_layer1_list lists them (the records cleared first), radiosity_layer1_dispatch
 //   turns their count into an indirect dispatch, radiosity_gather_listed gathers at each.
 // Both write the irradiance itself, not a mean to be scaled by the confidence, so that the blur
 // and the temporal filter average it linearly (a mean of products is not the product of means:
@@ -79,6 +79,7 @@
 #include "shared/mip.wgsl"
 #include "shared/level.wgsl"
 #include "shared/rgb9e5.wgsl"
+#include "shared/indirect.wgsl"
 
 // Mirrors `RadiosityUniform` in src/frame/uniforms.rs.
 struct Radiosity {
@@ -157,15 +158,12 @@ struct SourceTexel {
 // the next frame's feedback with LAYER1_BOUNCE.
 @group(0) @binding(12) var<storage, read_write> layer1_gathered: array<vec4<f32>>;
 // The texels the layer-1 gather runs at (those whose pixel holds a layer-1 point), listed by
-// radiosity_layer1_list: [POINTS_APPENDED] the count being appended, [POINTS_COUNT] this frame's
-// count, then the texels' indices from POINTS_HEAD; and the gather's indirect dispatch
-// arguments. A pixel that holds no layer-1 point then costs the gather nothing, on a driver
-// that runs every lane of a SIMD group where one lane works as on a GPU.
+// radiosity_layer1_list: [0] their count (cleared before the list), then their indices; and the
+// gather's indirect dispatch arguments. A pixel that holds no layer-1 point then costs the
+// gather nothing, on a driver that runs every lane of a SIMD group where one lane works as on a
+// GPU. The records of the texels not listed are cleared before the list.
 @group(0) @binding(13) var<storage, read_write> layer1_points: array<atomic<u32>>;
 @group(0) @binding(14) var<storage, read_write> layer1_args: array<u32>;
-const POINTS_APPENDED: u32 = 0u;
-const POINTS_COUNT: u32 = 1u;
-const POINTS_HEAD: u32 = 4u;
 
 // Whether the feedback reads `layer1_gathered` (the last frame ran the layer-1 gather).
 override LAYER1_BOUNCE: bool = false;
@@ -495,8 +493,7 @@ fn radiosity_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     gather_texel(gid.xy);
 }
 
-// Lists the texels whose pixel holds a layer-1 point for radiosity_gather_listed, and clears the
-// layer-1 gather at the others (the next frame's feedback must find nothing there).
+// Lists the texels whose pixel holds a layer-1 point for radiosity_gather_listed.
 @compute @workgroup_size(8, 8)
 fn radiosity_layer1_list(@builtin(global_invocation_id) gid: vec3<u32>) {
     let size = mip_size(LEVEL);
@@ -504,35 +501,29 @@ fn radiosity_layer1_list(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = mip_origin(LEVEL, gid.xy);
-    let t = gid.y * size.x + gid.x;
     if gword_depth(gbuffer1[(pixel.y * frame.width + pixel.x) * G_WORDS]) > 0.0 {
-        let i = atomicAdd(&layer1_points[POINTS_APPENDED], 1u);
-        atomicStore(&layer1_points[POINTS_HEAD + i], t);
-    } else {
-        layer1_gathered[t] = vec4<f32>(0.0);
+        let i = atomicAdd(&layer1_points[0], 1u);
+        atomicStore(&layer1_points[1u + i], gid.y * size.x + gid.x);
     }
 }
 
-// The listed texels' count as indirect dispatch arguments (64 texels a workgroup); the count
-// starts again from 0 for the next frame.
+// The listed texels' count as indirect dispatch arguments, 64 texels a workgroup.
 @compute @workgroup_size(1)
 fn radiosity_layer1_dispatch() {
-    let count = atomicExchange(&layer1_points[POINTS_APPENDED], 0u);
-    atomicStore(&layer1_points[POINTS_COUNT], count);
-    let groups = (count + 63u) / 64u;
-    layer1_args[0] = min(groups, 65535u);
-    layer1_args[1] = (groups + 65534u) / 65535u;
-    layer1_args[2] = 1u;
+    let size = indirect_size((atomicLoad(&layer1_points[0]) + 63u) / 64u);
+    layer1_args[0] = size.x;
+    layer1_args[1] = size.y;
+    layer1_args[2] = size.z;
 }
 
 // The gather at the listed texels (RECEIVER = 1).
 @compute @workgroup_size(64)
 fn radiosity_gather_listed(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let i = (wid.x + wid.y * 65535u) * 64u + li;
-    if i >= atomicLoad(&layer1_points[POINTS_COUNT]) {
+    let i = indirect_group(wid) * 64u + li;
+    if i >= atomicLoad(&layer1_points[0]) {
         return;
     }
-    let t = atomicLoad(&layer1_points[POINTS_HEAD + i]);
+    let t = atomicLoad(&layer1_points[1u + i]);
     let width = mip_size(LEVEL).x;
     gather_texel(vec2<u32>(t % width, t / width));
 }

@@ -46,6 +46,7 @@
 #include "shared/wide.wgsl"
 #include "shared/vis.wgsl"
 #include "shared/opacity.wgsl"
+#include "shared/indirect.wgsl"
 
 const SUBPIXEL: i32 = 256;
 // Triangles at most SMALL_EXTENT pixels across are drawn by their own thread (at most 64: the
@@ -563,10 +564,10 @@ fn bin_args() {
     atomicAdd(&bins[3], binned);
     let extra = min(atomicExchange(&bins[4], 0u), arrayLength(&items));
     atomicStore(&bins[6], extra);
-    let groups = entries + extra;
-    args[0] = min(groups, 65535u);
-    args[1] = (groups + 65534u) / 65535u;
-    args[2] = 1u;
+    let size = indirect_size(entries + extra);
+    args[0] = size.x;
+    args[1] = size.y;
+    args[2] = size.z;
 }
 
 // Exact edge function of a -> b at point p (all in 1/256 pixels).
@@ -598,7 +599,7 @@ fn tile_outside(s: Setup, lo: vec2<i32>, hi: vec2<i32>) -> bool {
 
 @compute @workgroup_size(16, 16)
 fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
-    let group = wid.x + wid.y * 65535u;
+    let group = indirect_group(wid);
     let entries = atomicLoad(&bins[2]);
     var entry = group;
     var slice = 0u;

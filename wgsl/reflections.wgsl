@@ -31,6 +31,7 @@
 #include "shared/gbuffer_read.wgsl"
 #include "shared/shade.wgsl"
 #include "shared/lit.wgsl"
+#include "shared/indirect.wgsl"
 
 // Most cells one ray visits (each a pyramid read, or at level 0 a pixel's test).
 const ITERATIONS: u32 = 64u;
@@ -145,10 +146,10 @@ fn reflections_classify(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
 
 @compute @workgroup_size(1)
 fn reflections_args() {
-    let count = atomicLoad(&tiles[0]);
-    args[0] = min(count, 65535u);
-    args[1] = (count + 65534u) / 65535u;
-    args[2] = 1u;
+    let size = indirect_size(atomicLoad(&tiles[0]));
+    args[0] = size.x;
+    args[1] = size.y;
+    args[2] = size.z;
 }
 
 // The screen position (pixels) of view-space point q; q lies in front of the camera.
@@ -455,7 +456,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
 
 @compute @workgroup_size(8, 8)
 fn reflections_march(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
-    let entry = wid.x + wid.y * 65535u;
+    let entry = indirect_group(wid);
     if entry >= atomicLoad(&tiles[0]) {
         return;
     }

@@ -8,6 +8,7 @@ use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
 use crate::settings::{RadiosityEstimator, Settings, downsample_level};
+use wgpu::BufferUsages as Usages;
 
 /// The radiosity's buffers, as
 /// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them: the gather
@@ -42,6 +43,14 @@ impl<'a> RadiosityBuffers<'a> {
     }
 }
 
+/// The layer-1 gather's buffers: its records (E / c and view depth per texel), the texels it runs
+/// at (those that hold a layer-1 point) and its indirect dispatch arguments.
+struct Layer1Gather {
+    records: wgpu::Buffer,
+    points: wgpu::Buffer,
+    args: wgpu::Buffer,
+}
+
 /// The radiosity: its constants, the gather source and its levels' constants, the gathered
 /// irradiance, the filtered irradiance of the last and this frame (ping-pong), and the blur's
 /// intermediate and result.
@@ -60,11 +69,8 @@ pub(crate) struct RadiosityStage {
     turn: u32,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
-    /// The layer-1 gather, made by the first frame that runs it, and the list of the texels it
-    /// runs at (with its indirect dispatch arguments).
-    layer1: Option<wgpu::Buffer>,
-    layer1_points: Option<wgpu::Buffer>,
-    layer1_args: Option<wgpu::Buffer>,
+    /// The layer-1 gather's buffers, made by the first frame that runs it.
+    layer1: Option<Layer1Gather>,
     /// Whether the last frame ran the layer-1 gather (the next one's feedback reads it).
     layer1_written: bool,
     /// Whether this frame's feedback reads the last frame's layer-1 gather.
@@ -103,8 +109,6 @@ impl RadiosityStage {
             scratch: buffer("deep-gbuffer.radiosity.blur"),
             blurred: buffer("deep-gbuffer.radiosity.blurred"),
             layer1: None,
-            layer1_points: None,
-            layer1_args: None,
             layer1_written: false,
             layer1_bounce: false,
         }
@@ -125,25 +129,18 @@ impl RadiosityStage {
         self.layer1_written = layer1;
         if layer1 && self.layer1.is_none() {
             let (w, h) = mip_size(s.width, s.height, self.level as usize);
-            self.layer1 = Some(gpu::storage_buffer(
-                device,
-                "deep-gbuffer.radiosity.layer1",
-                u64::from(w) * u64::from(h) * 16,
-                wgpu::BufferUsages::empty(),
-            ));
-            // Four words of counts, then a texel index each.
-            self.layer1_points = Some(gpu::storage_buffer(
-                device,
-                "deep-gbuffer.radiosity.layer1_points",
-                (4 + u64::from(w) * u64::from(h)) * 4,
-                wgpu::BufferUsages::empty(),
-            ));
-            self.layer1_args = Some(gpu::storage_buffer(
-                device,
-                "deep-gbuffer.radiosity.layer1_args",
-                16,
-                wgpu::BufferUsages::INDIRECT,
-            ));
+            let texels = u64::from(w) * u64::from(h);
+            let buffer = |name, size, usage| gpu::storage_buffer(device, name, size, usage);
+            self.layer1 = Some(Layer1Gather {
+                records: buffer("deep-gbuffer.radiosity.layer1", texels * 16, Usages::empty()),
+                // The count, then a texel index each.
+                points: buffer(
+                    "deep-gbuffer.radiosity.layer1_points",
+                    (1 + texels) * 4,
+                    Usages::empty(),
+                ),
+                args: buffer("deep-gbuffer.radiosity.layer1_args", 12, Usages::INDIRECT),
+            });
         }
         self.current = 1 - self.current;
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
@@ -160,13 +157,20 @@ impl RadiosityStage {
             gathered: &self.gathered,
             filtered,
             irradiance: if s.radiosity.blur_radius > 0 { &self.blurred } else { filtered },
-            layer1: self.layer1.as_ref().filter(|_| self.layer1_written),
+            layer1: self.layer1.as_ref().map(|l| &l.records).filter(|_| self.layer1_written),
         }
     }
 }
 
 impl Stage for RadiosityStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
+        // The layer-1 gather's list starts empty, and its records at 0 where no point is listed
+        // (the next frame's feedback must find nothing where a point was lost). This frame's
+        // feedback, which reads the last frame's records, was recorded before.
+        if let (PassId::RadiosityLayer1, Some(l)) = (id, &self.layer1) {
+            rec.encoder().clear_buffer(&l.points, 0, Some(4));
+            rec.encoder().clear_buffer(&l.records, 0, None);
+        }
         let mut pass = rec.pass(id);
         let (history_in, history_out) =
             (&self.history[1 - self.current], &self.history[self.current]);
@@ -184,9 +188,9 @@ impl Stage for RadiosityStage {
             (slot::PREV_VIS0, ctx.raster.previous_vis0()),
             // Only the passes that use the layer-1 gather read or write it; the blur's
             // scratch (unused here) stands in for it elsewhere.
-            (slot::LAYER1_GATHERED, self.layer1.as_ref().unwrap_or(&self.scratch)),
-            (slot::LAYER1_POINTS, self.layer1_points.as_ref().unwrap_or(&self.scratch)),
-            (slot::LAYER1_ARGS, self.layer1_args.as_ref().unwrap_or(&self.scratch)),
+            (slot::LAYER1_GATHERED, self.layer1.as_ref().map_or(&self.scratch, |l| &l.records)),
+            (slot::LAYER1_POINTS, self.layer1.as_ref().map_or(&self.scratch, |l| &l.points)),
+            (slot::LAYER1_ARGS, self.layer1.as_ref().map_or(&self.scratch, |l| &l.args)),
         ];
         let mut defines = ctx.settings.precision.defines();
         if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
@@ -238,7 +242,7 @@ impl Stage for RadiosityStage {
             }
             PassId::RadiosityLayer1 => {
                 // The gather runs at the texels that hold a layer-1 point only, listed first.
-                let args = self.layer1_args.as_ref().expect("made with the layer-1 gather");
+                let args = &self.layer1.as_ref().expect("made with the layer-1 gather").args;
                 dispatch(&mut pass, "radiosity_layer1_list", &entries, &[level], gather_size);
                 ctx.pipelines
                     .get(ctx.device, "radiosity", "radiosity_layer1_dispatch", &[], &[])
