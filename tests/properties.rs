@@ -68,17 +68,24 @@ proptest! {
     }
 }
 
-/// Writes `bytes` as `input.EXT` beside a copy of Suzanne's buffer (so a mutated Suzanne still
-/// finds its geometry; its textures are left out, which the loader must report) and loads it.
+/// Writes `bytes` as `input-N.EXT` (its own file: the tests of this file run on parallel
+/// threads) beside a copy of Suzanne's buffer (so a mutated Suzanne still finds its geometry;
+/// its textures are left out, which the loader must report) and loads it.
 fn load_bytes(ext: &str, bytes: &[u8]) -> deep_gbuffer::Result<Scene> {
-    let dir = std::env::temp_dir().join(format!("deep-gbuffer-prop-{}", std::process::id()));
-    if !dir.join("Suzanne.bin").exists() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    static LOADS: AtomicUsize = AtomicUsize::new(0);
+    let dir = DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("deep-gbuffer-prop-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::copy(fixture("suzanne/Suzanne.bin"), dir.join("Suzanne.bin")).unwrap();
-    }
-    let path = dir.join(format!("input.{ext}"));
+        dir
+    });
+    let path = dir.join(format!("input-{}.{ext}", LOADS.fetch_add(1, Ordering::Relaxed)));
     std::fs::write(&path, bytes).unwrap();
-    Scene::load(&path)
+    let scene = Scene::load(&path);
+    std::fs::remove_file(&path).unwrap();
+    scene
 }
 
 proptest! {

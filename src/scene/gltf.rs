@@ -150,10 +150,12 @@ impl<'a> Reference<'a> {
 
 /// Loads a `.gltf` or `.glb` file with its buffers and images.
 pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
-    precheck(path, limits)?;
+    // Read once: the checks and the parser see the same bytes, whatever happens to the file.
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    precheck(path, &bytes, limits)?;
     // The checks above cover what the `gltf` crate's validation and readers are known to panic
     // on; a panic left is a malformed file, not a crash.
-    let opened = catch_quietly(|| gltf::Gltf::open(path)).map_err(|panic| {
+    let opened = catch_quietly(|| gltf::Gltf::from_slice(&bytes)).map_err(|panic| {
         let message = panic
             .downcast_ref::<String>()
             .cloned()
@@ -577,10 +579,9 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-fn precheck(path: &Path, limits: &Limits) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+fn precheck(path: &Path, bytes: &[u8], limits: &Limits) -> Result<()> {
     let json_bytes: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
-        match gltf::Glb::from_slice(&bytes) {
+        match gltf::Glb::from_slice(bytes) {
             Ok(glb) => glb.json.into_owned().into(),
             Err(e) => return Err(Error::format(path, "GLB header", e.to_string())),
         }
@@ -592,6 +593,18 @@ fn precheck(path: &Path, limits: &Limits) -> Result<()> {
     for key in ["buffers", "images"] {
         let list = doc.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
         for (i, item) in list.iter().enumerate() {
+            // The `gltf` crate unwraps an image's source: a URI, or a buffer view with its MIME
+            // type (as the specification requires).
+            if key == "images" {
+                let has = |k: &str| item.get(k).is_some_and(|v| !v.is_null());
+                let at = || format!("images[{i}]");
+                if !has("uri") && !has("bufferView") {
+                    return Err(Error::format(path, at(), "neither a uri nor a bufferView"));
+                }
+                if has("bufferView") && !has("mimeType") {
+                    return Err(Error::format(path, at(), "a bufferView without its mimeType"));
+                }
+            }
             if let Some(uri) = item.get("uri").and_then(|u| u.as_str()) {
                 let at = || format!("{key}[{i}].uri");
                 check_uri(uri).map_err(|m| Error::format(path, at(), m))?;
