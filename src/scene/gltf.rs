@@ -38,9 +38,10 @@ fn catch_quietly<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
             }
         }));
     });
-    QUIET.with(|q| q.set(true));
+    // Nested catches leave the outer one quiet.
+    let outer = QUIET.with(|q| q.replace(true));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
-    QUIET.with(|q| q.set(false));
+    QUIET.with(|q| q.set(outer));
     result
 }
 
@@ -155,19 +156,24 @@ pub fn load(path: &Path, limits: &Limits) -> Result<Scene> {
     precheck(path, &bytes, limits)?;
     // The checks above cover what the `gltf` crate's validation and readers are known to panic
     // on; a panic left is a malformed file, not a crash.
-    let opened = catch_quietly(|| gltf::Gltf::from_slice(&bytes)).map_err(|panic| {
+    catch_quietly(|| read_document(path, &bytes, limits)).unwrap_or_else(|panic| {
         let message = panic
             .downcast_ref::<String>()
             .cloned()
             .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
             .unwrap_or_default();
-        Error::format(path, "glTF", format!("malformed document ({message})"))
-    })?;
+        Err(Error::format(path, "glTF", format!("malformed document ({message})")))
+    })
+}
+
+/// Parses the checked `bytes` of the file at `path` (its folder holds the buffers and images)
+/// into a scene.
+fn read_document(path: &Path, bytes: &[u8], limits: &Limits) -> Result<Scene> {
     let gltf_error = |e: gltf::Error| match e {
         gltf::Error::Io(io) => Error::io(path, io),
         other => Error::format(path, "glTF", other.to_string()),
     };
-    let gltf::Gltf { document: doc, blob } = opened.map_err(gltf_error)?;
+    let gltf::Gltf { document: doc, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_error)?;
     let buffers = gltf::import_buffers(&doc, path.parent(), blob).map_err(gltf_error)?;
     let mut scene = Scene::default();
     // Images are decoded once each, only for materials a primitive uses, and only after their
@@ -855,14 +861,19 @@ fn check_nodes(
 #[cfg(test)]
 mod tests {
     /// Run in a child process of the test binary (the panic hook is process-wide): a panic
-    /// caught by `catch_quietly` prints nothing, and a later uncaught panic on another thread
-    /// still reaches the hook that was installed before.
+    /// caught by `catch_quietly` prints nothing (also after a nested catch has ended), and a
+    /// later uncaught panic on another thread still reaches the hook that was installed before.
     #[test]
     fn a_caught_panic_is_not_printed() {
         const CHILD: &str = "DEEP_GBUFFER_QUIET_PANIC_CHILD";
         if std::env::var_os(CHILD).is_some() {
             let caught = super::catch_quietly(|| panic!("caught quietly"));
             assert!(caught.is_err());
+            let nested = super::catch_quietly(|| {
+                assert!(super::catch_quietly(|| panic!("caught quietly, inner")).is_err());
+                panic!("caught quietly, outer")
+            });
+            assert!(nested.is_err());
             let loud = std::thread::spawn(|| panic!("printed as usual")).join();
             assert!(loud.is_err());
             return;
