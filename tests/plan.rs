@@ -333,7 +333,7 @@ fn a_radius_under_a_pixel_leaves_its_effect_out() {
 
 /// Each pass's bytes: every storage buffer it binds, once, at its size. The direct pass of the
 /// Cornell box (radiosity on, so both layers and their Lambertian parts) writes exactly four
-/// images of `vec4<f32>`, and reads at least both G-buffer layers; every pass that ran has its
+/// images of `vec4<f32>` and layer 1's list, and reads at least both G-buffer layers; every pass that ran has its
 /// bytes; the device's bandwidth probe measures positive, finite rates.
 #[test]
 fn passes_report_the_bytes_they_bind() {
@@ -344,7 +344,15 @@ fn passes_report_the_bytes_they_bind() {
     let pixels = u64::from(w * h);
     let timings = r.renderer.timings(&g.device).unwrap();
     let direct = timings.iter().find(|t| t.name == "direct").expect("the direct pass ran");
-    assert_eq!(direct.written_bytes, 4 * pixels * 16, "radiance and diffuse of both layers");
+    // Layer 1 is lit at its listed pixels: the list (a count, an index a pixel) and its
+    // dispatch arguments (three words in a buffer of the 16 bytes `gpu::storage_buffer` makes at
+    // least) are written too.
+    let list = (1 + pixels) * 4 + 16;
+    assert_eq!(
+        direct.written_bytes,
+        4 * pixels * 16 + list,
+        "radiance and diffuse of both layers, the list"
+    );
     let gbuffers = r.renderer.gbuffer_buffer(0).size() + r.renderer.gbuffer_buffer(1).size();
     assert!(direct.read_bytes >= gbuffers, "{} < {gbuffers}", direct.read_bytes);
     for t in &timings {

@@ -510,7 +510,7 @@ fn radiosity_layer1_list(@builtin(global_invocation_id) gid: vec3<u32>) {
 // The listed texels' count as indirect dispatch arguments, 64 texels a workgroup.
 @compute @workgroup_size(1)
 fn radiosity_layer1_dispatch() {
-    let size = indirect_size((atomicLoad(&layer1_points[0]) + 63u) / 64u);
+    let size = list_size(atomicLoad(&layer1_points[0]));
     layer1_args[0] = size.x;
     layer1_args[1] = size.y;
     layer1_args[2] = size.z;

@@ -20,19 +20,46 @@ pub(crate) struct ShadowInputs<'a> {
 }
 
 /// Direct radiance of both layers (`vec4<f32>` per pixel), its Lambertian part (what the
-/// radiosity passes on) and the kernel's constants.
+/// radiosity passes on), the kernel's constants, and the list of the pixels that hold a layer-1
+/// surface (the count, then a pixel index each) with its indirect dispatch arguments.
 pub(crate) struct DirectStage {
     uniform: wgpu::Buffer,
     radiance: [wgpu::Buffer; 2],
     diffuse: [wgpu::Buffer; 2],
+    points: wgpu::Buffer,
+    args: wgpu::Buffer,
+}
+
+/// Which pixels [`DirectStage::light`] lights.
+#[derive(Clone, Copy)]
+pub(crate) enum Over<'a> {
+    /// The whole image.
+    Image,
+    /// The 8x8-pixel workgroups this indirect dispatch buffer holds.
+    Groups(&'a wgpu::Buffer),
+    /// The pixels that hold a surface, listed first: few pixels hold a layer-1 surface, and a
+    /// workgroup of 64 listed pixels has no idle lanes. The targets must be cleared before.
+    Listed,
 }
 
 impl DirectStage {
     /// Targets for a `pixels`-pixel image.
     pub(crate) fn new(device: &wgpu::Device, pixels: u64) -> Self {
-        let buffer =
-            |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
+        let usage = wgpu::BufferUsages::empty();
+        let buffer = |label| gpu::storage_buffer(device, label, pixels * 16, usage);
         DirectStage {
+            points: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.direct.points",
+                (1 + pixels) * 4,
+                usage,
+            ),
+            args: gpu::storage_buffer(
+                device,
+                "deep-gbuffer.direct.args",
+                12,
+                wgpu::BufferUsages::INDIRECT,
+            ),
             uniform: gpu::uniform_buffer_for::<DirectUniform>(device, "deep-gbuffer.direct"),
             diffuse: [
                 buffer("deep-gbuffer.direct.diffuse"),
@@ -82,31 +109,40 @@ impl Stage for DirectStage {
 
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Direct);
-        let mut pass = rec.pass(id);
         let plan = ctx.plan;
         let dof_layer1 = (plan.runs(Effect::Dof) && ctx.settings.dof.two_layers)
             || (plan.runs(Effect::MotionBlur) && ctx.settings.motion_blur.two_layers);
         // The reflections light the surfaces their rays hit themselves.
         let layers = if plan.runs(Effect::Radiosity) || dof_layer1 { 2 } else { 1 };
         let diffuse = plan.runs(Effect::Radiosity);
+        if layers == 2 {
+            // Layer 1 is lit at its listed pixels: the rest of its targets reads 0.
+            let encoder = rec.encoder();
+            encoder.clear_buffer(&self.points, 0, Some(4));
+            encoder.clear_buffer(&self.radiance[1], 0, None);
+            if diffuse {
+                encoder.clear_buffer(&self.diffuse[1], 0, None);
+            }
+        }
+        let mut pass = rec.pass(id);
         for layer in 0..layers {
             let targets = (&self.radiance[layer], diffuse.then_some(&self.diffuse[layer]));
-            self.light(ctx, &mut pass, ctx.gbuffer[layer], targets, None);
+            let over = if layer == 0 { Over::Image } else { Over::Listed };
+            self.light(ctx, &mut pass, ctx.gbuffer[layer], targets, over);
         }
     }
 }
 
 impl DirectStage {
     /// Records the direct light of G-buffer layer `gbuffer` into `radiance` (and its
-    /// Lambertian part into `diffuse`, when given), over the whole image or with the workgroups
-    /// `args` holds (8x8 pixels each).
+    /// Lambertian part into `diffuse`, when given) at the pixels `over` names.
     pub(crate) fn light(
         &self,
         ctx: &FrameContext<'_>,
         pass: &mut wgpu::ComputePass<'_>,
         gbuffer: &wgpu::Buffer,
         (radiance, diffuse): (&wgpu::Buffer, Option<&wgpu::Buffer>),
-        args: Option<&wgpu::Buffer>,
+        over: Over<'_>,
     ) {
         let mut defines = ctx.settings.precision.defines();
         if ctx.shadows.is_some() {
@@ -115,7 +151,9 @@ impl DirectStage {
         if diffuse.is_some() {
             defines.push("DIFFUSE");
         }
-        let pipeline = ctx.pipelines.get(ctx.device, "direct", "direct_main", &defines, &[]);
+        if let Over::Listed = over {
+            defines.push("LISTED");
+        }
         let mut entries = vec![
             (slot::FRAME, ctx.frame),
             (slot::DIRECT, &self.uniform),
@@ -133,9 +171,27 @@ impl DirectStage {
                 (slot::ATLAS, s.atlas),
             ]);
         }
-        match args {
-            Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
-            None => pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size()),
+        let kernel = |entry| ctx.pipelines.get(ctx.device, "direct", entry, &defines, &[]);
+        match over {
+            Over::Image => {
+                kernel("direct_main").dispatch_pixels(ctx.device, pass, &entries, ctx.size())
+            }
+            Over::Groups(args) => {
+                kernel("direct_main").dispatch_indirect(ctx.device, pass, &entries, args, 0)
+            }
+            Over::Listed => {
+                entries.extend([(slot::POINTS, &self.points), (slot::ARGS, &self.args)]);
+                let list = [
+                    (slot::FRAME, ctx.frame),
+                    (slot::GBUFFER, gbuffer),
+                    (slot::POINTS, &self.points),
+                ];
+                kernel("direct_list").dispatch_pixels(ctx.device, pass, &list, ctx.size());
+                let count = [(slot::POINTS, &self.points), (slot::ARGS, &self.args)];
+                kernel("direct_list_args").dispatch(ctx.device, pass, &count, (1, 1));
+                kernel("direct_listed")
+                    .dispatch_indirect(ctx.device, pass, &entries, &self.args, 0);
+            }
         }
     }
 }

@@ -135,7 +135,8 @@ impl Stage for TransparencyStage {
                     super::resolve::resolve_layer(ctx, &mut pass, current, &self.gbuffer, args);
                     if ctx.plan.runs(Effect::Direct) {
                         let (g, out) = (&self.gbuffer, &self.radiance);
-                        ctx.lighting.light(ctx, &mut pass, g, (out, None), args);
+                        let over = super::direct::Over::Groups(&self.args);
+                        ctx.lighting.light(ctx, &mut pass, g, (out, None), over);
                     }
                     entries.retain(|(s, _)| *s != slot::VIS);
                     entries.push((slot::VIS, current));
