@@ -9,7 +9,10 @@
 //!
 //! `DEEP_GBUFFER_BENCH_SIZES` (default `256x256,1920x1080`) and `DEEP_GBUFFER_BENCH_SCENES`
 //! (default `cornell,engine`) narrow the run. A summary table (mean ms per pass, and the
-//! compute/hardware ratio) is printed at the end and written to `target/raster-bench.md`.
+//! compute/hardware ratio) is printed at the end and written to `target/raster-bench.md`, with
+//! the ratios the goals name measured again frame by frame in turns (compute / hardware layer
+//! 0, `Previous` and `Reproject` both layers / two-pass layer 0; `DEEP_GBUFFER_BENCH_ROUNDS`
+//! rounds, default 24, 0 to leave them out), which hold on a busy machine.
 
 mod common;
 
@@ -24,6 +27,40 @@ use wgpu::util::DeviceExt;
 
 static SUMMARY: Mutex<Vec<(String, String, f64)>> = Mutex::new(Vec::new());
 static PACKED_ERRORS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+/// Per scene and size, per pair, the ratio of each round's two times.
+static RATIOS: Mutex<Vec<(String, String, Vec<f64>)>> = Mutex::new(Vec::new());
+
+/// Times `a` and `b` (each returns one frame's GPU milliseconds) one after the other in each
+/// of `common::rounds()` rounds (after one round unrecorded), the order swapped each round, and
+/// keeps each round's ratio a / b: the two run under the same load, so the ratio holds on a
+/// busy machine where the means of two benchmarks taken a minute apart do not.
+fn alternate(group: &str, name: &str, mut a: impl FnMut() -> f64, mut b: impl FnMut() -> f64) {
+    let rounds = common::rounds();
+    if rounds == 0 {
+        return;
+    }
+    let ratios: Vec<f64> = (0..=rounds)
+        .map(|i| {
+            if i % 2 == 0 {
+                let ta = a();
+                ta / b()
+            } else {
+                let tb = b();
+                a() / tb
+            }
+        })
+        .skip(1)
+        .collect();
+    eprintln!("{group}: {name}: {:?}", spread(&ratios));
+    RATIOS.lock().unwrap().push((group.to_string(), name.to_string(), ratios));
+}
+
+/// The median, the lowest and the highest of `ratios`.
+fn spread(ratios: &[f64]) -> (f64, f64, f64) {
+    let mut sorted = ratios.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    (sorted[sorted.len() / 2], sorted[0], sorted[sorted.len() - 1])
+}
 
 /// The error of the packed G-buffer against the full one, over the surface pixels of both layers:
 /// normal angle (max and mean, radians), base colour (max absolute), emission (max relative).
@@ -112,6 +149,8 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
         ("resolve packed", Layer1Variant::TwoPass, Precision::Packed, "resolve"),
         ("raster.clear", Layer1Variant::TwoPass, Precision::Full, "raster.clear"),
     ];
+    // The renderers of the variants the alternated pairs below time again.
+    let mut kept: std::collections::HashMap<&str, Renderer> = Default::default();
     for (name, layer1, precision, pass) in variants {
         // Only the raster and resolve passes: obscurance has its own benchmark.
         let ao = deep_gbuffer::AoSettings { enabled: false, ..Default::default() };
@@ -137,6 +176,9 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
             })
         });
         record(&group_name, name, sum, count);
+        if matches!(name, "raster.layer0" | "raster.layers previous" | "raster.layers reproject") {
+            kept.insert(name, renderer);
+        }
     }
 
     // The same triangles through the hardware rasterizer, on a second device of the adapter,
@@ -152,25 +194,48 @@ fn bench_scene(c: &mut Criterion, gpu: &Gpu, hw: &Gpu, scene_name: &str, (w, h):
     let all_double_sided = scene.materials.iter().all(|m| m.double_sided);
     let baseline = BaselinePass::new(&hw.device, w, h, !all_double_sided);
     let mut timestamps = Timestamps::new(&hw.device, &hw.queue, 1).expect("timestamp queries");
+    let mut hardware_frame = || {
+        timestamps.reset();
+        let mut encoder = hw.device.create_command_encoder(&Default::default());
+        let writes = timestamps.render_pass("hardware.layer0");
+        baseline.encode(&hw.device, &mut encoder, &hw_buffers, &frame, writes);
+        timestamps.resolve(&mut encoder);
+        hw.queue.submit([encoder.finish()]);
+        timestamps.read(&hw.device).unwrap()[0].ms
+    };
     let (mut sum, mut count) = (0.0, 0u64);
     group.bench_function("hardware.layer0", |b| {
         b.iter_custom(|iters| {
-            let mut ms = 0.0;
-            for _ in 0..iters {
-                timestamps.reset();
-                let mut encoder = hw.device.create_command_encoder(&Default::default());
-                let writes = timestamps.render_pass("hardware.layer0");
-                baseline.encode(&hw.device, &mut encoder, &hw_buffers, &frame, writes);
-                timestamps.resolve(&mut encoder);
-                hw.queue.submit([encoder.finish()]);
-                ms += timestamps.read(&hw.device).unwrap()[0].ms;
-            }
+            let ms: f64 = (0..iters).map(|_| hardware_frame()).sum();
             sum += ms;
             count += iters;
             Duration::from_secs_f64(ms / 1e3)
         })
     });
     record(&group_name, "hardware.layer0", sum, count);
+
+    // The ratios the goals name, each pair alternated frame by frame.
+    if let Some(mut layer0) = kept.remove("raster.layer0") {
+        let compute = |r: &mut Renderer, pass| frames(gpu, r, &buffers, &camera, pass, 1);
+        alternate(
+            &group_name,
+            "compute / hardware layer 0",
+            || compute(&mut layer0, "raster.layer0"),
+            &mut hardware_frame,
+        );
+        for (variant, name) in [
+            ("raster.layers previous", "previous both layers / layer 0"),
+            ("raster.layers reproject", "reproject both layers / layer 0"),
+        ] {
+            let Some(mut one_pass) = kept.remove(variant) else { continue };
+            alternate(
+                &group_name,
+                name,
+                || compute(&mut one_pass, "raster.layers"),
+                || compute(&mut layer0, "raster.layer0"),
+            );
+        }
+    }
     group.finish();
 }
 
@@ -213,6 +278,12 @@ fn main() {
         ) {
             table += &format!("| {g} | {:.1} | {:.2} |\n", l0 / hw, l1 / l0);
         }
+    }
+    table += "\nEach pair timed frame by frame in turns (the same load for both; the median, lowest and highest of the rounds' ratios):\n\n| scene | pair | median | range | rounds |\n|---|---|---:|---:|---:|\n";
+    for (g, name, ratios) in RATIOS.lock().unwrap().iter() {
+        let (median, low, high) = spread(ratios);
+        table +=
+            &format!("| {g} | {name} | {median:.2} | {low:.2}-{high:.2} | {} |\n", ratios.len());
     }
     table += "\n| scene | normal angle max (rad) | normal angle mean (rad) | base colour max abs | emission max rel |\n|---|---:|---:|---:|---:|\n";
     for row in PACKED_ERRORS.lock().unwrap().iter() {

@@ -41,6 +41,12 @@ pub fn sizes(var: &str, default: &str) -> Vec<(u32, u32)> {
         .collect()
 }
 
+/// Rounds of the alternated ratios: `DEEP_GBUFFER_BENCH_ROUNDS`, default 24 (0: none).
+pub fn rounds() -> usize {
+    std::env::var("DEEP_GBUFFER_BENCH_ROUNDS")
+        .map_or(24, |v| v.parse().expect("DEEP_GBUFFER_BENCH_ROUNDS: a number of rounds"))
+}
+
 /// GPU milliseconds per pass, summed over frames.
 #[derive(Default)]
 pub struct PassTotals {
