@@ -282,6 +282,12 @@ impl GSample {
 }
 
 impl GBufferLayer {
+    /// The most samples (pixels times channels, over every layer) [`read_exr`] reads: 2^30 (4
+    /// GiB of 32-bit floats; two 3840x2160 layers of the 17 channels hold a quarter of it).
+    ///
+    /// [`read_exr`]: GBufferLayer::read_exr
+    pub const MAX_EXR_SAMPLES: u64 = 1 << 30;
+
     /// The layer in the full encoding, as `wgsl/shared/gbuffer.wgsl` reads it (64 bytes a pixel).
     pub fn encode_full(&self) -> Vec<f32> {
         self.samples.iter().flat_map(GSample::words).collect()
@@ -327,11 +333,36 @@ impl GBufferLayer {
     }
 
     /// Reads the layers [`write_exr`](GBufferLayer::write_exr) wrote, in their order. A missing
-    /// channel, a channel that is not 32-bit float or layers of different sizes are errors that
-    /// name the file.
+    /// channel, a channel that is not 32-bit float, layers of different sizes, a layer over
+    /// [`MAX_IMAGE_SIDE`](crate::settings::MAX_IMAGE_SIDE) a side or headers that declare more
+    /// than [`MAX_EXR_SAMPLES`](GBufferLayer::MAX_EXR_SAMPLES) are errors that name the file.
     pub fn read_exr(path: &std::path::Path) -> crate::Result<Vec<GBufferLayer>> {
         use exr::prelude::*;
         let bad = |message: String| crate::Error::ImageRead { path: path.into(), message };
+        let read_error = |e| match e {
+            Error::Io(source) => crate::Error::io(path, source),
+            e => bad(e.to_string()),
+        };
+        // The headers first: what they declare is allocated before a sample is read, so a size
+        // past what a G-buffer can be is refused from them.
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(read_error)?;
+        let mut samples = 0u64;
+        for header in meta.headers.iter() {
+            let (w, h) = header.layer_size.into();
+            let side = crate::settings::MAX_IMAGE_SIDE as usize;
+            if w > side || h > side {
+                return Err(bad(format!(
+                    "a {w}x{h} layer, larger than {side} pixels a side, refused"
+                )));
+            }
+            samples += (w * h * header.channels.list.len()) as u64;
+        }
+        if samples > Self::MAX_EXR_SAMPLES {
+            return Err(bad(format!(
+                "{samples} samples declared, more than the {} a G-buffer file may hold, refused",
+                Self::MAX_EXR_SAMPLES
+            )));
+        }
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -339,10 +370,7 @@ impl GBufferLayer {
             .all_layers()
             .all_attributes()
             .from_file(path)
-            .map_err(|e| match e {
-                Error::Io(source) => crate::Error::io(path, source),
-                e => bad(e.to_string()),
-            })?;
+            .map_err(read_error)?;
         let mut layers = Vec::new();
         for (i, layer) in image.layer_data.iter().enumerate() {
             let (w, h) = (layer.size.0, layer.size.1);

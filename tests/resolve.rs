@@ -325,6 +325,38 @@ fn gbuffer_exr_round_trips_and_refuses_other_files() {
         deep_gbuffer::GBufferLayer::read_exr(&fixture("cornell/CornellBox-Original.mtl")),
         Err(deep_gbuffer::Error::ImageRead { .. })
     ));
+    // Headers whose data windows declare more than a G-buffer can be are refused from the
+    // headers, before anything is allocated for them (the reader would allocate what they say:
+    // 39 GB for one such file, an abort).
+    let bytes = std::fs::read(fixture(GBUFFER_FIXTURES[0].0)).unwrap();
+    let window = |bytes: &[u8], max: i32| {
+        let mut out = bytes.to_vec();
+        let key = b"dataWindow\0box2i\0";
+        let mut found = 0;
+        for at in 0..out.len() - key.len() {
+            if &out[at..at + key.len()] == key {
+                // The attribute's size (16), then xMin, yMin, xMax, yMax.
+                let value = at + key.len() + 4;
+                out[value + 8..value + 12].copy_from_slice(&max.to_le_bytes());
+                out[value + 12..value + 16].copy_from_slice(&max.to_le_bytes());
+                found += 1;
+            }
+        }
+        assert!(found > 0);
+        out
+    };
+    let dir = std::env::temp_dir().join(format!("deep-gbuffer-exr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (max, needle) in [(20_000, "pixels a side"), (15_999, "samples declared")] {
+        let path = dir.join(format!("window-{max}.exr"));
+        std::fs::write(&path, window(&bytes, max)).unwrap();
+        match deep_gbuffer::GBufferLayer::read_exr(&path) {
+            Err(deep_gbuffer::Error::ImageRead { message, .. }) => {
+                assert!(message.contains(needle), "{max}: {message}")
+            }
+            other => panic!("{max}: {:?}", other.map(|l| l.len())),
+        }
+    }
 }
 
 /// A provided G-buffer must fit the renderer: its size, its layer count, the full encoding.
