@@ -594,6 +594,9 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
     for token in spec.split(',') {
         let token = token.trim();
         let value = match token.split_once('=') {
+            Some((k, _)) if k.trim().is_empty() => {
+                return Err(bad(format!("`{token}` in `{spec}`: a value without its key")));
+            }
             Some((k, v)) => {
                 key = Some(k.trim());
                 values.push((k.trim(), Vec::new()));
@@ -602,8 +605,10 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
             None => token,
         };
         let k = key.ok_or_else(|| bad(format!("`{spec}`: expected key=value")))?;
-        let v: f32 =
-            value.trim().parse().map_err(|_| bad(format!("`{value}` in {k} is not a number")))?;
+        let v: f32 = value.trim().parse().map_err(|_| match value.trim() {
+            "" => bad(format!("`{k}` has an empty value in `{spec}`")),
+            _ => bad(format!("`{value}` in {k} is not a number")),
+        })?;
         values.last_mut().expect("a key was pushed").1.push(v);
     }
     for (k, v) in values {

@@ -687,7 +687,8 @@ impl ShadowSettings {
         bounds: Option<(glam::Vec3, glam::Vec3)>,
     ) -> u32 {
         let (lo, hi) = Self::AUTO_RESOLUTION;
-        let side = width.max(height) as f32;
+        // An image without pixels (which the settings refuse) still gets a resolution.
+        let side = width.max(height).max(1) as f32;
         let Some((a, b)) = bounds else { return lo };
         let r = (b - a).length() * 0.5;
         let d = ((a + b) * 0.5 - camera.eye).length();
