@@ -5,7 +5,7 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::{GBUFFER_FIXTURES, gpu, render, shade_fixture, soup};
+use common::{GBUFFER_FIXTURES, gpu, render, render_frames, shade_fixture, soup};
 use deep_gbuffer::cpu::{composite as cpu_composite, direct as cpu_direct, shadow as cpu_shadow};
 use deep_gbuffer::scene::{GpuLight, Light, LightKind, Projection};
 use deep_gbuffer::{Camera, Scene, Settings};
@@ -42,12 +42,7 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     // The CPU draws its own shadow maps, with the CPU rasterizer.
     let (faces, light_faces, atlas) =
         cpu_shadow::maps(&scene, Settings::default().shadows.resolution);
-    let shadows = cpu_shadow::Shadows {
-        faces: &faces,
-        light_faces: &light_faces,
-        atlas: &atlas,
-        pcf: Settings::default().shadows.pcf,
-    };
+    let shadows = default_shadows(&faces, &light_faces, &atlas);
     let gpu_atlas = r
         .renderer
         .read_f32(&g.device, &g.queue, r.renderer.shadow_atlas_buffer().unwrap())
@@ -90,6 +85,53 @@ fn cornell_direct_and_composite_match_cpu_reference() {
         assert!(close(*a, *b), "composite at pixel {p}: gpu {a} cpu {b}");
         assert!(a.is_finite() && a.min_element() >= 0.0);
     }
+}
+
+/// The CPU's shadow lookup of `maps` with the default filter.
+fn default_shadows<'a>(
+    faces: &'a [deep_gbuffer::frame::ShadowFace],
+    light_faces: &'a [[u32; 2]],
+    atlas: &'a [u64],
+) -> cpu_shadow::Shadows<'a> {
+    cpu_shadow::Shadows { faces, light_faces, atlas, pcf: Settings::default().shadows.pcf }
+}
+
+/// Layer 1 is lit at the pixels that hold a layer-1 surface only: after the camera moved, its
+/// direct light and Lambertian part still match the CPU reference at every pixel, 0 wherever
+/// layer 1 holds nothing (nothing of the frame before is left).
+#[test]
+fn layer1_direct_light_matches_cpu_reference_after_the_camera_moved() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let mut moved = camera.clone();
+    moved.eye += (camera.target - camera.eye) * 0.3 + Vec3::new(0.3, 0.2, 0.0);
+    let (w, h) = (48, 36);
+    let settings = Settings { timings: false, ..Settings::with_size(w, h) };
+    let r = render_frames(&scene, &[moved, camera], settings);
+    let g = gpu();
+    let layer1 = r.renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap();
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let (faces, light_faces, atlas) =
+        cpu_shadow::maps(&scene, Settings::default().shadows.resolution);
+    let shadows = default_shadows(&faces, &light_faces, &atlas);
+    let (expected, lambert) =
+        cpu_direct::direct_and_diffuse(&r.frame, &layer1.samples, &lights, Some(&shadows));
+    let actual = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer()).unwrap();
+    let diffuse = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.diffuse_buffer(1)).unwrap();
+    let (mut held, mut lit) = (0, 0);
+    for (p, (a, b)) in actual.iter().zip(&expected).enumerate() {
+        assert!(close(*a, *b), "layer-1 direct at pixel {p}: gpu {a} cpu {b}");
+        assert!(
+            close(diffuse[p], lambert[p]),
+            "layer-1 diffuse at {p}: {} {}",
+            diffuse[p],
+            lambert[p]
+        );
+        held += usize::from(layer1.samples[p].depth > 0.0);
+        lit += usize::from(b.max_element() > 0.01);
+    }
+    // Some pixels hold a layer-1 surface and some of those are lit; most hold none.
+    assert!(lit > 0 && held < (w * h / 2) as usize, "{held} held, {lit} lit");
 }
 
 /// A white plane lit straight from above by a directional light, seen straight from above

@@ -180,7 +180,8 @@ impl DirectStage {
                 kernel("direct_main").dispatch_indirect(ctx.device, pass, &entries, args, 0)
             }
             Over::Listed => {
-                entries.extend([(slot::POINTS, &self.points), (slot::ARGS, &self.args)]);
+                // Not `args`: a dispatch may not read its indirect buffer as storage.
+                entries.push((slot::POINTS, &self.points));
                 let list = [
                     (slot::FRAME, ctx.frame),
                     (slot::GBUFFER, gbuffer),
