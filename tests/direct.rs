@@ -38,19 +38,13 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     );
     let g = gpu();
     let layer0 = r.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
-    // The CPU draws its own shadow maps, with the CPU rasterizer.
-    let (faces, light_faces, atlas) =
-        cpu_shadow::maps(&scene, Settings::default().shadows.resolution);
-    let shadows = default_shadows(&faces, &light_faces, &atlas);
+    let (expected, lambert, atlas) = cpu_reference(&scene, &r, &layer0.samples);
     let gpu_atlas = r
         .renderer
         .read_f32(&g.device, &g.queue, r.renderer.shadow_atlas_buffer().unwrap())
         .unwrap();
     let gpu_atlas: Vec<u64> = bytemuck::pod_collect_to_vec(&gpu_atlas);
     assert!(gpu_atlas == atlas, "the GPU's shadow maps equal the CPU rasterizer's");
-    let (expected, lambert) =
-        cpu_direct::direct_and_diffuse(&r.frame, &layer0.samples, &lights, Some(&shadows));
     let actual = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct_buffer()).unwrap();
     let diffuse = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.diffuse_buffer(0)).unwrap();
     let mut lit = 0;
@@ -87,13 +81,26 @@ fn cornell_direct_and_composite_match_cpu_reference() {
     }
 }
 
-/// The CPU's shadow lookup of `maps` with the default filter.
-fn default_shadows<'a>(
-    faces: &'a [deep_gbuffer::frame::ShadowFace],
-    light_faces: &'a [[u32; 2]],
-    atlas: &'a [u64],
-) -> cpu_shadow::Shadows<'a> {
-    cpu_shadow::Shadows { faces, light_faces, atlas, pcf: Settings::default().shadows.pcf }
+/// The CPU reference's direct light and Lambertian part of `samples` seen from `r`'s last
+/// frame, with shadow maps the CPU draws itself (the CPU rasterizer, the default settings), and
+/// those maps' visibility words.
+fn cpu_reference(
+    scene: &Scene,
+    r: &common::Rendered,
+    samples: &[deep_gbuffer::GSample],
+) -> (Vec<Vec3>, Vec<Vec3>, Vec<u64>) {
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let defaults = Settings::default().shadows;
+    let (faces, light_faces, atlas) = cpu_shadow::maps(scene, defaults.resolution);
+    let shadows = cpu_shadow::Shadows {
+        faces: &faces,
+        light_faces: &light_faces,
+        atlas: &atlas,
+        pcf: defaults.pcf,
+    };
+    let (direct, lambert) =
+        cpu_direct::direct_and_diffuse(&r.frame, samples, &lights, Some(&shadows));
+    (direct, lambert, atlas)
 }
 
 /// Layer 1 is lit at the pixels that hold a layer-1 surface only: after the camera moved, its
@@ -110,12 +117,7 @@ fn layer1_direct_light_matches_cpu_reference_after_the_camera_moved() {
     let r = render_frames(&scene, &[moved, camera], settings);
     let g = gpu();
     let layer1 = r.renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap();
-    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
-    let (faces, light_faces, atlas) =
-        cpu_shadow::maps(&scene, Settings::default().shadows.resolution);
-    let shadows = default_shadows(&faces, &light_faces, &atlas);
-    let (expected, lambert) =
-        cpu_direct::direct_and_diffuse(&r.frame, &layer1.samples, &lights, Some(&shadows));
+    let (expected, lambert, _) = cpu_reference(&scene, &r, &layer1.samples);
     let actual = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.direct1_buffer()).unwrap();
     let diffuse = r.renderer.read_rgb(&g.device, &g.queue, r.renderer.diffuse_buffer(1)).unwrap();
     let (mut held, mut lit) = (0, 0);
