@@ -68,21 +68,27 @@ proptest! {
     }
 }
 
-/// Writes `bytes` as `input-N.EXT` (its own file: the tests of this file run on parallel
-/// threads) beside a copy of Suzanne's buffer (so a mutated Suzanne still finds its geometry;
-/// its textures are left out, which the loader must report) and loads it.
-fn load_bytes(ext: &str, bytes: &[u8]) -> deep_gbuffer::Result<Scene> {
+/// Writes `bytes` to a file `input-N.EXT` of its own (the tests of this file run on parallel
+/// threads) beside a copy of Suzanne's buffer, and returns its path.
+fn temp_file(ext: &str, bytes: &[u8]) -> std::path::PathBuf {
     use std::sync::atomic::{AtomicUsize, Ordering};
     static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
-    static LOADS: AtomicUsize = AtomicUsize::new(0);
+    static FILES: AtomicUsize = AtomicUsize::new(0);
     let dir = DIR.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!("deep-gbuffer-prop-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::copy(fixture("suzanne/Suzanne.bin"), dir.join("Suzanne.bin")).unwrap();
         dir
     });
-    let path = dir.join(format!("input-{}.{ext}", LOADS.fetch_add(1, Ordering::Relaxed)));
+    let path = dir.join(format!("input-{}.{ext}", FILES.fetch_add(1, Ordering::Relaxed)));
     std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// Loads `bytes` as a scene file `input-N.EXT` ([`temp_file`]: a mutated Suzanne still finds
+/// its geometry; its textures are left out, which the loader must report).
+fn load_bytes(ext: &str, bytes: &[u8]) -> deep_gbuffer::Result<Scene> {
+    let path = temp_file(ext, bytes);
     let scene = Scene::load(&path);
     std::fs::remove_file(&path).unwrap();
     scene
@@ -114,6 +120,30 @@ proptest! {
             }
             if let Ok(scene) = load_bytes(ext, &bytes) {
                 prop_assert!(scene.validate().is_ok() || scene.triangles.is_empty());
+            }
+        }
+    }
+
+    /// The shipped EXR fixtures (a stored G-buffer, an environment) with bytes overwritten and
+    /// cut short: an error or an image, never a panic, and never an allocation of whatever a
+    /// mutated header declares (an abort, which ends this test's process).
+    #[test]
+    fn mutated_exr_files_never_panic(
+        edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8),
+        cut in any::<prop::sample::Index>(),
+    ) {
+        for file in ["gbuffer/cornell-48x36.exr", "environment/gradient.exr"] {
+            let mut bytes = std::fs::read(fixture(file)).unwrap();
+            // Within the headers (their first kilobyte), where a byte decides what is allocated.
+            for (at, value) in &edits {
+                let i = at.index(bytes.len().min(1024));
+                bytes[i] = *value;
+            }
+            for length in [bytes.len(), cut.index(bytes.len())] {
+                let path = temp_file("exr", &bytes[..length]);
+                let _ = deep_gbuffer::GBufferLayer::read_exr(&path);
+                let _ = deep_gbuffer::Environment::load_exr(&path);
+                std::fs::remove_file(&path).unwrap();
             }
         }
     }
