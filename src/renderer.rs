@@ -388,9 +388,20 @@ impl Renderer {
         let binding_limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         let gbuffer_bytes = pixels * gbuffer::bytes_per_pixel(settings.precision);
         if gbuffer_bytes > binding_limit {
+            // What would fit: the packed precision, or the most pixels at this one.
+            let packed = pixels * gbuffer::bytes_per_pixel(crate::Precision::Packed);
+            let hint = match settings.precision {
+                crate::Precision::Full if packed <= binding_limit => {
+                    "; the packed precision would fit".to_string()
+                }
+                _ => format!(
+                    "; at most {} pixels fit at this precision",
+                    binding_limit / gbuffer::bytes_per_pixel(settings.precision)
+                ),
+            };
             return Err(Error::ExceedsLimit {
                 what: format!(
-                    "a {}x{} G-buffer layer ({} precision)",
+                    "a {}x{} G-buffer layer ({} precision{hint})",
                     settings.width,
                     settings.height,
                     settings.precision.name()

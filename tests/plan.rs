@@ -333,8 +333,8 @@ fn a_radius_under_a_pixel_leaves_its_effect_out() {
 
 /// Each pass's bytes: every storage buffer it binds, once, at its size. The direct pass of the
 /// Cornell box (radiosity on, so both layers and their Lambertian parts) writes exactly four
-/// images of `vec4<f32>` and layer 1's list, and reads at least both G-buffer layers; every pass that ran has its
-/// bytes; the device's bandwidth probe measures positive, finite rates.
+/// images of `vec4<f32>` and layer 1's list, and reads at least both G-buffer layers; every
+/// pass that ran has its bytes; the device's bandwidth probe measures positive, finite rates.
 #[test]
 fn passes_report_the_bytes_they_bind() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
