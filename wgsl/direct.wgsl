@@ -17,6 +17,9 @@
 #include "shared/gbuffer_read.wgsl"
 #include "shared/lit.wgsl"
 #include "shared/indirect.wgsl"
+#if LISTED
+#include "shared/list.wgsl"
+#endif
 
 // Mirrors `DirectUniform` in src/frame/uniforms.rs.
 struct Direct {
@@ -43,9 +46,9 @@ struct Direct {
 #endif
 
 #if LISTED
-// The count, then the pixels to light.
-@group(0) @binding(9) var<storage, read_write> points: array<atomic<u32>>;
-@group(0) @binding(10) var<storage, read_write> args: array<u32>;
+// The pixels to light (shared/list.wgsl).
+@group(0) @binding(9) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> list_args: array<u32>;
 #endif
 
 @compute @workgroup_size(8, 8)
@@ -65,28 +68,23 @@ fn direct_list(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = gid.y * frame.width + gid.x;
     if gword_depth(gbuffer[p * G_WORDS]) > 0.0 {
-        atomicStore(&points[1u + atomicAdd(&points[0], 1u)], p);
+        list_append(p);
     }
 }
 
 // The listed pixels' count as indirect dispatch arguments.
 @compute @workgroup_size(1)
 fn direct_list_args() {
-    let size = list_size(atomicLoad(&points[0]));
-    args[0] = size.x;
-    args[1] = size.y;
-    args[2] = size.z;
+    list_write_args();
 }
 
 // Lights the listed pixels.
 @compute @workgroup_size(64)
 fn direct_listed(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let i = indirect_group(wid) * 64u + li;
-    if i >= atomicLoad(&points[0]) {
-        return;
+    var p = 0u;
+    if list_item(wid, li, &p) {
+        shade(vec2<u32>(p % frame.width, p / frame.width));
     }
-    let p = atomicLoad(&points[1u + i]);
-    shade(vec2<u32>(p % frame.width, p / frame.width));
 }
 #endif
 

@@ -80,6 +80,7 @@
 #include "shared/level.wgsl"
 #include "shared/rgb9e5.wgsl"
 #include "shared/indirect.wgsl"
+#include "shared/list.wgsl"
 
 // Mirrors `RadiosityUniform` in src/frame/uniforms.rs.
 struct Radiosity {
@@ -158,12 +159,12 @@ struct SourceTexel {
 // the next frame's feedback with LAYER1_BOUNCE.
 @group(0) @binding(12) var<storage, read_write> layer1_gathered: array<vec4<f32>>;
 // The texels the layer-1 gather runs at (those whose pixel holds a layer-1 point), listed by
-// radiosity_layer1_list: [0] their count (cleared before the list), then their indices; and the
-// gather's indirect dispatch arguments. A pixel that holds no layer-1 point then costs the
-// gather nothing, on a driver that runs every lane of a SIMD group where one lane works as on a
-// GPU. The records of the texels not listed are cleared before the list.
-@group(0) @binding(13) var<storage, read_write> layer1_points: array<atomic<u32>>;
-@group(0) @binding(14) var<storage, read_write> layer1_args: array<u32>;
+// radiosity_layer1_list (shared/list.wgsl), and the gather's indirect dispatch arguments. A
+// pixel that holds no layer-1 point then costs the gather nothing, on a driver that runs every
+// lane of a SIMD group where one lane works as on a GPU. The records of the texels not listed
+// are cleared before the list.
+@group(0) @binding(13) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> list_args: array<u32>;
 
 // Whether the feedback reads `layer1_gathered` (the last frame ran the layer-1 gather).
 override LAYER1_BOUNCE: bool = false;
@@ -502,30 +503,24 @@ fn radiosity_layer1_list(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = mip_origin(LEVEL, gid.xy);
     if gword_depth(gbuffer1[(pixel.y * frame.width + pixel.x) * G_WORDS]) > 0.0 {
-        let i = atomicAdd(&layer1_points[0], 1u);
-        atomicStore(&layer1_points[1u + i], gid.y * size.x + gid.x);
+        list_append(gid.y * size.x + gid.x);
     }
 }
 
 // The listed texels' count as indirect dispatch arguments, 64 texels a workgroup.
 @compute @workgroup_size(1)
 fn radiosity_layer1_dispatch() {
-    let size = list_size(atomicLoad(&layer1_points[0]));
-    layer1_args[0] = size.x;
-    layer1_args[1] = size.y;
-    layer1_args[2] = size.z;
+    list_write_args();
 }
 
 // The gather at the listed texels (RECEIVER = 1).
 @compute @workgroup_size(64)
 fn radiosity_gather_listed(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let i = indirect_group(wid) * 64u + li;
-    if i >= atomicLoad(&layer1_points[0]) {
-        return;
+    var t = 0u;
+    if list_item(wid, li, &t) {
+        let width = mip_size(LEVEL).x;
+        gather_texel(vec2<u32>(t % width, t / width));
     }
-    let t = atomicLoad(&layer1_points[1u + i]);
-    let width = mip_size(LEVEL).x;
-    gather_texel(vec2<u32>(t % width, t / width));
 }
 
 // The gather at texel `at` of level LEVEL.

@@ -1,7 +1,7 @@
 //! `wgsl/direct.wgsl`: deferred direct light, with or without shadow maps, of layer 0 and of
 //! layer 1 where a later pass reads it.
 
-use super::{FrameContext, Recorder, Stage};
+use super::{FrameContext, PointList, Recorder, Stage};
 use crate::SceneBuffers;
 use crate::frame::DirectUniform;
 use crate::gpu::{self, slots::direct as slot};
@@ -21,13 +21,12 @@ pub(crate) struct ShadowInputs<'a> {
 
 /// Direct radiance of both layers (`vec4<f32>` per pixel), its Lambertian part (what the
 /// radiosity passes on), the kernel's constants, and the list of the pixels that hold a layer-1
-/// surface (the count, then a pixel index each) with its indirect dispatch arguments.
+/// surface.
 pub(crate) struct DirectStage {
     uniform: wgpu::Buffer,
     radiance: [wgpu::Buffer; 2],
     diffuse: [wgpu::Buffer; 2],
-    points: wgpu::Buffer,
-    args: wgpu::Buffer,
+    listed: PointList,
 }
 
 /// Which pixels [`DirectStage::light`] lights.
@@ -45,21 +44,10 @@ pub(crate) enum Over<'a> {
 impl DirectStage {
     /// Targets for a `pixels`-pixel image.
     pub(crate) fn new(device: &wgpu::Device, pixels: u64) -> Self {
-        let usage = wgpu::BufferUsages::empty();
-        let buffer = |label| gpu::storage_buffer(device, label, pixels * 16, usage);
+        let buffer =
+            |label| gpu::storage_buffer(device, label, pixels * 16, wgpu::BufferUsages::empty());
         DirectStage {
-            points: gpu::storage_buffer(
-                device,
-                "deep-gbuffer.direct.points",
-                (1 + pixels) * 4,
-                usage,
-            ),
-            args: gpu::storage_buffer(
-                device,
-                "deep-gbuffer.direct.args",
-                12,
-                wgpu::BufferUsages::INDIRECT,
-            ),
+            listed: PointList::new(device, "deep-gbuffer.direct.list", pixels),
             uniform: gpu::uniform_buffer_for::<DirectUniform>(device, "deep-gbuffer.direct"),
             diffuse: [
                 buffer("deep-gbuffer.direct.diffuse"),
@@ -118,7 +106,7 @@ impl Stage for DirectStage {
         if layers == 2 {
             // Layer 1 is lit at its listed pixels: the rest of its targets reads 0.
             let encoder = rec.encoder();
-            encoder.clear_buffer(&self.points, 0, Some(4));
+            self.listed.clear(encoder);
             encoder.clear_buffer(&self.radiance[1], 0, None);
             if diffuse {
                 encoder.clear_buffer(&self.diffuse[1], 0, None);
@@ -180,18 +168,15 @@ impl DirectStage {
                 kernel("direct_main").dispatch_indirect(ctx.device, pass, &entries, args, 0)
             }
             Over::Listed => {
+                let PointList { list, args } = &self.listed;
                 // Not `args`: a dispatch may not read its indirect buffer as storage.
-                entries.push((slot::POINTS, &self.points));
-                let list = [
-                    (slot::FRAME, ctx.frame),
-                    (slot::GBUFFER, gbuffer),
-                    (slot::POINTS, &self.points),
-                ];
-                kernel("direct_list").dispatch_pixels(ctx.device, pass, &list, ctx.size());
-                let count = [(slot::POINTS, &self.points), (slot::ARGS, &self.args)];
+                entries.push((slot::LIST, list));
+                let listing =
+                    [(slot::FRAME, ctx.frame), (slot::GBUFFER, gbuffer), (slot::LIST, list)];
+                kernel("direct_list").dispatch_pixels(ctx.device, pass, &listing, ctx.size());
+                let count = [(slot::LIST, list), (slot::LIST_ARGS, args)];
                 kernel("direct_list_args").dispatch(ctx.device, pass, &count, (1, 1));
-                kernel("direct_listed")
-                    .dispatch_indirect(ctx.device, pass, &entries, &self.args, 0);
+                kernel("direct_listed").dispatch_indirect(ctx.device, pass, &entries, args, 0);
             }
         }
     }

@@ -33,6 +33,32 @@ use crate::settings::Settings;
 
 /// Records a frame's passes into the caller's encoder, each in a compute pass of its own, named
 /// by its [`PassId`], timed when timestamps are on, and with the bytes it binds counted
+/// A list of the items (pixels, texels) a kernel runs at, built on the GPU each frame, and the
+/// indirect dispatch over it (`wgsl/shared/list.wgsl`: 64 items a workgroup).
+pub(crate) struct PointList {
+    /// The count, then an item each.
+    pub list: wgpu::Buffer,
+    /// The dispatch arguments (not bound with the dispatch that reads them).
+    pub args: wgpu::Buffer,
+}
+
+impl PointList {
+    /// A list of up to `capacity` items, its buffers labelled `label` and `label_args`.
+    pub(crate) fn new(device: &wgpu::Device, label: &str, capacity: u64) -> Self {
+        let buffer =
+            |label: &str, size, usage| crate::gpu::storage_buffer(device, label, size, usage);
+        PointList {
+            list: buffer(label, (1 + capacity) * 4, wgpu::BufferUsages::empty()),
+            args: buffer(&format!("{label}_args"), 12, wgpu::BufferUsages::INDIRECT),
+        }
+    }
+
+    /// Empties the list (before the kernel that appends to it).
+    pub(crate) fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.clear_buffer(&self.list, 0, Some(4));
+    }
+}
+
 /// ([`traffic`]).
 pub(crate) struct Recorder<'a> {
     encoder: &'a mut wgpu::CommandEncoder,

@@ -3,12 +3,11 @@
 use super::blur::Blur;
 use super::pyramid::Pyramid;
 use super::upsample::Upsample;
-use super::{FrameContext, Recorder, Stage};
+use super::{FrameContext, PointList, Recorder, Stage};
 use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
 use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::PassId;
 use crate::settings::{RadiosityEstimator, Settings, downsample_level};
-use wgpu::BufferUsages as Usages;
 
 /// The radiosity's buffers, as
 /// [`Renderer::radiosity_buffers`](crate::Renderer::radiosity_buffers) names them: the gather
@@ -43,12 +42,11 @@ impl<'a> RadiosityBuffers<'a> {
     }
 }
 
-/// The layer-1 gather's buffers: its records (E / c and view depth per texel), the texels it runs
-/// at (those that hold a layer-1 point) and its indirect dispatch arguments.
+/// The layer-1 gather's buffers: its records (E / c and view depth per texel) and the list of the
+/// texels it runs at (those that hold a layer-1 point).
 struct Layer1Gather {
     records: wgpu::Buffer,
-    points: wgpu::Buffer,
-    args: wgpu::Buffer,
+    listed: PointList,
 }
 
 /// The radiosity: its constants, the gather source and its levels' constants, the gathered
@@ -130,16 +128,14 @@ impl RadiosityStage {
         if layer1 && self.layer1.is_none() {
             let (w, h) = mip_size(s.width, s.height, self.level as usize);
             let texels = u64::from(w) * u64::from(h);
-            let buffer = |name, size, usage| gpu::storage_buffer(device, name, size, usage);
             self.layer1 = Some(Layer1Gather {
-                records: buffer("deep-gbuffer.radiosity.layer1", texels * 16, Usages::empty()),
-                // The count, then a texel index each.
-                points: buffer(
-                    "deep-gbuffer.radiosity.layer1_points",
-                    (1 + texels) * 4,
-                    Usages::empty(),
+                records: gpu::storage_buffer(
+                    device,
+                    "deep-gbuffer.radiosity.layer1",
+                    texels * 16,
+                    wgpu::BufferUsages::empty(),
                 ),
-                args: buffer("deep-gbuffer.radiosity.layer1_args", 12, Usages::INDIRECT),
+                listed: PointList::new(device, "deep-gbuffer.radiosity.layer1_list", texels),
             });
         }
         self.current = 1 - self.current;
@@ -168,7 +164,7 @@ impl Stage for RadiosityStage {
         // (the next frame's feedback must find nothing where a point was lost). This frame's
         // feedback, which reads the last frame's records, was recorded before.
         if let (PassId::RadiosityLayer1, Some(l)) = (id, &self.layer1) {
-            rec.encoder().clear_buffer(&l.points, 0, Some(4));
+            l.listed.clear(rec.encoder());
             rec.encoder().clear_buffer(&l.records, 0, None);
         }
         let mut pass = rec.pass(id);
@@ -189,8 +185,8 @@ impl Stage for RadiosityStage {
             // Only the passes that use the layer-1 gather read or write it; the blur's
             // scratch (unused here) stands in for it elsewhere.
             (slot::LAYER1_GATHERED, self.layer1.as_ref().map_or(&self.scratch, |l| &l.records)),
-            (slot::LAYER1_POINTS, self.layer1.as_ref().map_or(&self.scratch, |l| &l.points)),
-            (slot::LAYER1_ARGS, self.layer1.as_ref().map_or(&self.scratch, |l| &l.args)),
+            (slot::LIST, self.layer1.as_ref().map_or(&self.scratch, |l| &l.listed.list)),
+            (slot::LIST_ARGS, self.layer1.as_ref().map_or(&self.scratch, |l| &l.listed.args)),
         ];
         let mut defines = ctx.settings.precision.defines();
         if ctx.settings.radiosity.estimator == RadiosityEstimator::Slices {
@@ -242,7 +238,7 @@ impl Stage for RadiosityStage {
             }
             PassId::RadiosityLayer1 => {
                 // The gather runs at the texels that hold a layer-1 point only, listed first.
-                let args = &self.layer1.as_ref().expect("made with the layer-1 gather").args;
+                let args = &self.layer1.as_ref().expect("made with the layer-1 gather").listed.args;
                 dispatch(&mut pass, "radiosity_layer1_list", &entries, &[level], gather_size);
                 ctx.pipelines
                     .get(ctx.device, "radiosity", "radiosity_layer1_dispatch", &[], &[])

@@ -11,8 +11,3 @@ fn indirect_size(groups: u32) -> vec3<u32> {
 fn indirect_group(wid: vec3<u32>) -> u32 {
     return wid.x + wid.y * 65535u;
 }
-
-// The arguments for a list of `count` items, 64 a workgroup.
-fn list_size(count: u32) -> vec3<u32> {
-    return indirect_size((count + 63u) / 64u);
-}
