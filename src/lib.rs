@@ -65,7 +65,7 @@ pub use wgpu;
 pub use environment::Environment;
 pub use error::{Error, Result};
 pub use gbuffer::{GBufferLayer, GSample};
-pub use passes::radiosity::RadiosityBuffers;
+pub use passes::radiosity::{OffscreenBuffers, RadiosityBuffers};
 pub use plan::{Effect, PassId, Plan, Reason};
 pub use renderer::{Diagnostics, Renderer, Terms};
 pub use scene::upload::{GpuMaterial, GpuTextureSlot, ImportedBuffers, SceneBuffers};

@@ -311,6 +311,10 @@ struct RadiosityArgs {
     /// indirect light it reflects (see `RadiositySettings::normal_test`) [default: on].
     #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
     radiosity_normal_test: Option<bool>,
+    /// Add the light of the surfaces neither layer holds, from each shadow-casting light's
+    /// reflective shadow map (see `RadiositySettings::offscreen`) [default: on].
+    #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
+    radiosity_offscreen: Option<bool>,
 }
 
 impl RadiosityArgs {
@@ -325,6 +329,7 @@ impl RadiosityArgs {
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
         r.damping = self.damping.unwrap_or(r.damping);
         r.normal_test = self.radiosity_normal_test.unwrap_or(r.normal_test);
+        r.offscreen = self.radiosity_offscreen.unwrap_or(r.offscreen);
     }
 }
 

@@ -46,6 +46,9 @@ pub enum PassId {
     Direct,
     /// Outgoing radiance of both layers and the radiosity gather.
     Radiosity,
+    /// The light of the surfaces neither layer holds, from the lights' reflective shadow maps,
+    /// added to the gather ([`RadiositySettings::offscreen`](crate::RadiositySettings::offscreen)).
+    RadiosityOffscreen,
     /// The radiosity gather at layer 1's points, for the next frame's bounce
     /// ([`RadiositySettings::layer1_samples`](crate::RadiositySettings::layer1_samples)).
     RadiosityLayer1,
@@ -86,7 +89,7 @@ pub(crate) enum StageId {
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 20] = [
+    pub const FIXED: [PassId; 21] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -98,6 +101,7 @@ impl PassId {
         PassId::AoBlur,
         PassId::Direct,
         PassId::Radiosity,
+        PassId::RadiosityOffscreen,
         PassId::RadiosityLayer1,
         PassId::RadiosityTemporal,
         PassId::RadiosityBlur,
@@ -124,6 +128,7 @@ impl PassId {
             PassId::Shadow { name, .. } => return Cow::Owned(format!("shadow.{name}")),
             PassId::Direct => "direct",
             PassId::Radiosity => "radiosity",
+            PassId::RadiosityOffscreen => "radiosity.offscreen",
             PassId::RadiosityLayer1 => "radiosity.layer1",
             PassId::RadiosityTemporal => "radiosity.temporal",
             PassId::RadiosityBlur => "radiosity.blur",
@@ -144,6 +149,7 @@ impl PassId {
             PassId::Shadow { .. } => Some(Effect::Shadows),
             PassId::Direct => Some(Effect::Direct),
             PassId::Radiosity
+            | PassId::RadiosityOffscreen
             | PassId::RadiosityLayer1
             | PassId::RadiosityTemporal
             | PassId::RadiosityBlur => Some(Effect::Radiosity),
@@ -175,6 +181,7 @@ impl PassId {
             PassId::Shadow { .. } => StageId::Shadows,
             PassId::Direct => StageId::Direct,
             PassId::Radiosity
+            | PassId::RadiosityOffscreen
             | PassId::RadiosityLayer1
             | PassId::RadiosityTemporal
             | PassId::RadiosityBlur => StageId::Radiosity,
@@ -433,6 +440,9 @@ impl Plan {
         }
         if radiosity {
             passes.push(PassId::Radiosity);
+            if shadows && settings.radiosity.offscreen {
+                passes.push(PassId::RadiosityOffscreen);
+            }
             if layers == 2 && settings.radiosity.layer1_samples > 0 {
                 passes.push(PassId::RadiosityLayer1);
             }
@@ -537,9 +547,14 @@ impl fmt::Display for Plan {
         writeln!(f, "direct:  {}", why(Effect::Direct))?;
         writeln!(
             f,
-            "radiosity: {}{}",
+            "radiosity: {}{}{}",
             why(Effect::Radiosity),
-            if self.contains(&PassId::RadiosityLayer1) { ", layer 1 gathers" } else { "" }
+            if self.contains(&PassId::RadiosityLayer1) { ", layer 1 gathers" } else { "" },
+            if self.contains(&PassId::RadiosityOffscreen) {
+                ", off-screen light from the shadow maps"
+            } else {
+                ""
+            }
         )?;
         writeln!(f, "reflections: {}", why(Effect::Reflections))?;
         writeln!(f, "dof:     {}", why(Effect::Dof))?;

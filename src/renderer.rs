@@ -20,7 +20,7 @@ use crate::passes::direct::DirectStage;
 use crate::passes::dof::DofStage;
 use crate::passes::motion_blur::MotionBlurStage;
 use crate::passes::present::Present;
-use crate::passes::radiosity::{RadiosityBuffers, RadiosityStage};
+use crate::passes::radiosity::{OffscreenBuffers, RadiosityBuffers, RadiosityStage};
 use crate::passes::raster::RasterStage;
 use crate::passes::reflections::ReflectionsStage;
 use crate::passes::resolve::ResolveStage;
@@ -234,6 +234,11 @@ impl Stages {
                 .as_ref()
                 .filter(|_| runs(Effect::Shadows))
                 .map(ShadowStage::inputs),
+            rsm: self
+                .shadows
+                .as_ref()
+                .filter(|_| plan.contains(&PassId::RadiosityOffscreen))
+                .and_then(ShadowStage::rsm_inputs),
             direct: [self.direct.radiance(0), self.direct.radiance(1)],
             diffuse: [self.direct.diffuse(0), self.direct.diffuse(1)],
             lighting: &self.direct,
@@ -732,8 +737,14 @@ impl Renderer {
             // The history is usable only if this stage drew the last frame.
             let history = self.history.is_some() && st.radiosity.is_some();
             let radiosity = st.radiosity.get_or_insert_with(|| RadiosityStage::new(device, s));
-            let layer1 = plan.contains(&PassId::RadiosityLayer1);
-            radiosity.prepare(device, queue, s, history, layer1);
+            // The reflective shadow maps' faces the off-screen light sums (none without it).
+            let offscreen = st
+                .shadows
+                .as_ref()
+                .filter(|_| plan.contains(&PassId::RadiosityOffscreen))
+                .and_then(ShadowStage::rsm_inputs)
+                .map_or(0, |r| r.count);
+            radiosity.prepare(device, queue, s, history, plan, offscreen);
         }
         if plan.runs(Effect::Reflections) {
             let reflections =
@@ -1074,6 +1085,22 @@ impl Renderer {
     pub fn radiosity_buffers(&self) -> Option<RadiosityBuffers<'_>> {
         let r = self.stages.radiosity.as_ref().filter(|_| self.ran(Effect::Radiosity))?;
         Some(r.buffers(&self.settings))
+    }
+
+    /// The off-screen light's buffers of the last frame, or `None` when it did not run
+    /// ([`RadiositySettings::offscreen`](crate::RadiositySettings::offscreen)).
+    pub fn offscreen_buffers(&self) -> Option<OffscreenBuffers<'_>> {
+        let ran = self.plan.as_ref().is_some_and(|p| p.contains(&PassId::RadiosityOffscreen));
+        let rsm = self.stages.shadows.as_ref().filter(|_| ran)?.rsm_inputs()?;
+        let clusters = self.stages.radiosity.as_ref()?.clusters()?;
+        Some(OffscreenBuffers {
+            faces: rsm.faces,
+            face_lights: rsm.face_lights,
+            vis: rsm.vis,
+            records: rsm.gbuffer,
+            face_count: rsm.count,
+            clusters,
+        })
     }
 
     /// The reflected radiance (rgb, scaled by the reflectivity) and its confidence (a) of the

@@ -405,6 +405,11 @@ pub struct RadiositySettings {
     /// alone, and a bounce that lands behind layer 0 stops there). 0 to 256; runs only where
     /// layer 1 is drawn.
     pub layer1_samples: u32,
+    /// Add the light of the surfaces that neither layer holds, as each shadow-casting light's
+    /// reflective shadow map sees them (`wgsl/offscreen.wgsl`): the ceiling around a light above
+    /// the screen's top, a side turned to the light and away from the camera. Runs with the
+    /// shadow maps (`radiosity.offscreen`), and only where some light casts shadows.
+    pub offscreen: bool,
 }
 
 /// How the radiosity pass gathers irradiance from what the layers show (`wgsl/radiosity.wgsl`).
@@ -492,6 +497,7 @@ impl Default for RadiositySettings {
             mip_offset: 4,
             downsample: 1,
             layer1_samples: 8,
+            offscreen: true,
         }
     }
 }

@@ -67,6 +67,7 @@ fn render_writes_image_layers_and_timings() {
             "ao.blur",
             "direct",
             "radiosity",
+            "radiosity.offscreen",
             "radiosity.layer1",
             "radiosity.temporal",
             "radiosity.blur",

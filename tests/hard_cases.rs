@@ -101,12 +101,22 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
         let radiance = source.iter().flat_map(|t| [t.radiance(0), t.radiance(1)]);
         let b: Vec<Vec4> = radiance.map(|b| b.extend(0.0)).collect();
         finite_nonneg("B", &b);
-        let largest_b = b.iter().fold(Vec3::ZERO, |m, b| m.max(b.truncate()));
+        let mut largest_b = b.iter().fold(Vec3::ZERO, |m, b| m.max(b.truncate()));
+        // The off-screen light's clusters send their texels' mean radiance, flux / area, into
+        // the share of the hemisphere the gather left open: the bound takes the largest too.
+        if let Some(o) = r.offscreen_buffers() {
+            let clusters: Vec<deep_gbuffer::frame::Cluster> = bytemuck::pod_collect_to_vec(
+                &deep_gbuffer::gpu::read_buffer(&g.device, &g.queue, o.clusters).unwrap(),
+            );
+            for c in clusters.iter().filter(|c| c.area > 0.0) {
+                largest_b = largest_b.max(Vec3::from(c.flux) / c.area);
+            }
+        }
         let bound = PI * largest_b * (1.0 + BOUND_SLACK);
         for (p, e) in values[0].iter().enumerate() {
             assert!(
                 e.truncate().cmple(bound).all(),
-                "{what}: gathered irradiance {e} at pixel {p} above pi max B = {bound}"
+                "{what}: gathered irradiance {e} at pixel {p} above pi max radiance = {bound}"
             );
         }
         // The layer-1 gather keeps E / c, a weighted mean of what it saw: bounded alike.
@@ -116,7 +126,7 @@ fn check_buffers(r: &Renderer, scene: &Scene, what: &str) -> usize {
             for (t, e) in records.iter().enumerate() {
                 assert!(
                     e.truncate().cmple(bound).all(),
-                    "{what}: layer-1 E / c {e} at texel {t} above pi max B = {bound}"
+                    "{what}: layer-1 E / c {e} at texel {t} above pi max radiance = {bound}"
                 );
             }
         }

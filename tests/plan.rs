@@ -38,17 +38,48 @@ fn the_layer1_gather_follows_the_radiosity_and_layer_1() {
     };
     assert!(gathers(&Settings::default()));
     let printed = Plan::new(&cornell_info(), &Settings::default()).to_string();
-    assert!(printed.contains("radiosity: runs, layer 1 gathers\n"), "{printed}");
+    assert!(
+        printed
+            .contains("radiosity: runs, layer 1 gathers, off-screen light from the shadow maps\n"),
+        "{printed}"
+    );
     assert!(!gathers(&Settings { layers: 1, ..Settings::default() }), "no layer 1 drawn");
     let off = deep_gbuffer::RadiositySettings { layer1_samples: 0, ..Default::default() };
     let plan = Plan::new(&cornell_info(), &Settings { radiosity: off, ..Settings::default() });
     assert!(!plan.contains(&PassId::RadiosityLayer1));
     assert_eq!(plan.layers, 2, "the gather still reads layer 1");
-    assert!(plan.to_string().contains("radiosity: runs\n"), "{plan}");
+    assert!(
+        plan.to_string().contains("radiosity: runs, off-screen light from the shadow maps\n"),
+        "{plan}"
+    );
     assert!(!gathers(&Settings { radiosity: no_radiosity(), ..Settings::default() }));
     let too_many = deep_gbuffer::RadiositySettings { layer1_samples: 257, ..Default::default() };
     let e = too_many.validate().unwrap_err().to_string();
     assert!(e.contains("radiosity.layer1_samples"), "{e}");
+}
+
+/// The off-screen light runs with the radiosity where some light casts a shadow map to draw its
+/// reflective shadow map from, and not when it is turned off.
+#[test]
+fn the_offscreen_light_follows_the_shadow_maps() {
+    let runs = |info: &SceneInfo, settings: &Settings| {
+        Plan::new(info, settings).contains(&PassId::RadiosityOffscreen)
+    };
+    let info = cornell_info();
+    assert!(runs(&info, &Settings::default()));
+    let mut off = Settings::default();
+    off.radiosity.offscreen = false;
+    assert!(!runs(&info, &off), "turned off");
+    assert!(!Plan::new(&info, &off).to_string().contains("off-screen"));
+    let mut no_shadows = Settings::default();
+    no_shadows.shadows.enabled = false;
+    assert!(!runs(&info, &no_shadows), "no shadow map to draw it from");
+    let mut unshadowed = cornell_info();
+    unshadowed.lights.iter_mut().for_each(|l| l.casts_shadows = false);
+    assert!(!runs(&unshadowed, &Settings::default()), "no light casts a shadow");
+    let glowing = SceneInfo { lights: Vec::new(), ..cornell_info() };
+    assert!(!runs(&glowing, &Settings::default()), "emission alone");
+    assert!(!runs(&info, &Settings { radiosity: no_radiosity(), ..Settings::default() }));
 }
 
 fn cornell_info() -> SceneInfo {
@@ -82,6 +113,7 @@ fn cornell_runs_everything_it_has() {
             ceiling_shadow(),
             PassId::Direct,
             PassId::Radiosity,
+            PassId::RadiosityOffscreen,
             PassId::RadiosityLayer1,
             PassId::RadiosityTemporal,
             PassId::RadiosityBlur,

@@ -8,6 +8,7 @@ pub mod direct;
 pub mod dof;
 pub mod frame;
 pub mod motion_blur;
+pub mod offscreen;
 pub mod pyramid;
 pub mod radiosity;
 pub mod raster;

@@ -17,7 +17,10 @@ mod source;
 mod uniforms;
 
 pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
-pub use shadow::{LightFaces, ShadowFace, face, face_cameras, light_faces};
+pub use shadow::{
+    Cluster, LightFaces, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, ShadowFace, face,
+    face_cameras, light_faces,
+};
 pub use source::{RGB9E5_MAX, SourceTexel, pack_normal, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
     AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform, MOTION_TILE,
@@ -76,6 +79,8 @@ pub const MIRRORED: &[MirrorLayout] = &[
     LevelUniform::LAYOUT,
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,
+    OffscreenUniform::LAYOUT,
+    Cluster::LAYOUT,
     GpuLight::LAYOUT,
     GpuMaterial::LAYOUT,
     GpuTextureSlot::LAYOUT,

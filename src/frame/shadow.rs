@@ -141,3 +141,55 @@ pub fn light_faces(
     }
     out
 }
+
+/// Texels a side of a light's reflective shadow map faces (`wgsl/offscreen.wgsl`).
+pub const RSM_RESOLUTION: u32 = 64;
+/// Clusters per reflective shadow map face: 8x8 texels each.
+pub const RSM_CLUSTERS_PER_FACE: u32 = 64;
+
+/// Mirrors `struct Offscreen` in `wgsl/offscreen.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct OffscreenUniform {
+    /// Reflective shadow map faces of every shadow-casting light.
+    pub faces: u32,
+    /// Each pixel sums one in `stride` clusters (1, 2, 4, 8 or 16).
+    pub stride: u32,
+    /// Frames since the radiosity's history began (turns which clusters a pixel sums).
+    pub turn: u32,
+    /// The frame's layers (layer 1's depths are read with 2).
+    pub layers: u32,
+}
+
+mirrored!(OffscreenUniform, "offscreen.wgsl", "Offscreen", [faces, stride, turn, layers]);
+
+impl OffscreenUniform {
+    /// Clusters a pixel sums at most, about: the stride follows the count.
+    pub const CLUSTERS_PER_PIXEL: u32 = 32;
+
+    /// The constants for `faces` faces, the radiosity's `turn` and the frame's `layers`.
+    pub fn new(faces: u32, turn: u32, layers: u32) -> Self {
+        let clusters = faces * RSM_CLUSTERS_PER_FACE;
+        let stride = clusters.div_ceil(Self::CLUSTERS_PER_PIXEL).next_power_of_two().min(16);
+        OffscreenUniform { faces, stride, turn, layers }
+    }
+}
+
+/// Mirrors `struct Cluster` in `wgsl/offscreen.wgsl`: the surface patches of one 8x8-texel
+/// block of a reflective shadow map face that no layer holds.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct Cluster {
+    /// Area-weighted mean world point.
+    pub position: [f32; 3],
+    /// Summed area (0: an empty cluster).
+    pub area: f32,
+    /// Area-weighted mean normal (length at most 1).
+    pub normal: [f32; 3],
+    pub _pad0: f32,
+    /// Summed reflected radiance times area, `sum L A`.
+    pub flux: [f32; 3],
+    pub _pad1: f32,
+}
+
+mirrored!(Cluster, "offscreen.wgsl", "Cluster", [position, area, normal, flux]);

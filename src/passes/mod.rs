@@ -132,6 +132,8 @@ pub(crate) struct FrameContext<'a> {
     pub previous_positions: Option<&'a wgpu::Buffer>,
     /// The shadow maps, when the plan draws them.
     pub shadows: Option<direct::ShadowInputs<'a>>,
+    /// The reflective shadow maps, when the plan adds the off-screen light.
+    pub rsm: Option<shadow::RsmInputs<'a>>,
     /// Direct radiance of each layer.
     pub direct: [&'a wgpu::Buffer; 2],
     /// Its Lambertian part, of each layer (written when the radiosity runs).

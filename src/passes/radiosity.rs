@@ -4,9 +4,12 @@ use super::blur::Blur;
 use super::pyramid::Pyramid;
 use super::upsample::Upsample;
 use super::{FrameContext, PointList, Recorder, Stage};
-use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
-use crate::gpu::{self, slots::radiosity as slot};
-use crate::plan::PassId;
+use crate::frame::{
+    Cluster, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, RadiosityUniform,
+    SourceTexel, mip_size,
+};
+use crate::gpu::{self, slots::offscreen as off, slots::radiosity as slot};
+use crate::plan::{PassId, Plan};
 use crate::settings::{RadiosityEstimator, Settings, downsample_level};
 
 /// The radiosity's buffers, as
@@ -73,6 +76,16 @@ pub(crate) struct RadiosityStage {
     layer1_written: bool,
     /// Whether this frame's feedback reads the last frame's layer-1 gather.
     layer1_bounce: bool,
+    /// The off-screen light's constants and clusters (made by the first frame that adds it).
+    offscreen: Option<Offscreen>,
+}
+
+/// The off-screen light's constants and the clusters of the reflective shadow maps' texels
+/// that no layer holds.
+struct Offscreen {
+    uniform: wgpu::Buffer,
+    clusters: wgpu::Buffer,
+    faces: u32,
 }
 
 impl RadiosityStage {
@@ -109,20 +122,24 @@ impl RadiosityStage {
             layer1: None,
             layer1_written: false,
             layer1_bounce: false,
+            offscreen: None,
         }
     }
 
     /// Starts a frame: filters into the other history buffer and writes the constants;
-    /// `history` tells whether the last frame's irradiance may be used, `layer1` whether this
-    /// frame runs the layer-1 gather.
+    /// `history` tells whether the last frame's irradiance may be used; `plan` whether this
+    /// frame runs the layer-1 gather, and the off-screen light over `offscreen` reflective
+    /// shadow map faces.
     pub(crate) fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         s: &Settings,
         history: bool,
-        layer1: bool,
+        plan: &Plan,
+        offscreen: u32,
     ) {
+        let layer1 = plan.contains(&PassId::RadiosityLayer1);
         self.layer1_bounce = history && self.layer1_written;
         self.layer1_written = layer1;
         if layer1 && self.layer1.is_none() {
@@ -142,6 +159,28 @@ impl RadiosityStage {
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
         let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        if plan.contains(&PassId::RadiosityOffscreen) {
+            let clusters = u64::from(offscreen.max(1) * RSM_CLUSTERS_PER_FACE);
+            let o = match self.offscreen.take() {
+                Some(o) if o.faces == offscreen => o,
+                _ => Offscreen {
+                    uniform: gpu::uniform_buffer_for::<OffscreenUniform>(
+                        device,
+                        "deep-gbuffer.offscreen",
+                    ),
+                    clusters: gpu::storage_buffer(
+                        device,
+                        "deep-gbuffer.offscreen.clusters",
+                        clusters * std::mem::size_of::<Cluster>() as u64,
+                        wgpu::BufferUsages::empty(),
+                    ),
+                    faces: offscreen,
+                },
+            };
+            let uniform = OffscreenUniform::new(offscreen, self.turn, plan.layers);
+            queue.write_buffer(&o.uniform, 0, bytemuck::bytes_of(&uniform));
+            self.offscreen = Some(o);
+        }
     }
 
     /// This frame's buffers (the last frame's, between frames).
@@ -156,6 +195,34 @@ impl RadiosityStage {
             layer1: self.layer1.as_ref().map(|l| &l.records).filter(|_| self.layer1_written),
         }
     }
+}
+
+impl RadiosityStage {
+    /// The off-screen light's clusters (a [`Cluster`] each), once a frame has added it.
+    pub(crate) fn clusters(&self) -> Option<&wgpu::Buffer> {
+        self.offscreen.as_ref().map(|o| &o.clusters)
+    }
+}
+
+/// The off-screen light's buffers, as [`Renderer::offscreen_buffers`](crate::Renderer) names
+/// them: the lights' reflective shadow maps and the clusters of their texels that no layer
+/// holds.
+#[derive(Clone, Copy, Debug)]
+pub struct OffscreenBuffers<'a> {
+    /// A [`ShadowFace`](crate::frame::ShadowFace) per face, at
+    /// [`RSM_RESOLUTION`] texels a side (offsets in texels).
+    pub faces: &'a wgpu::Buffer,
+    /// The light of each face (`u32`).
+    pub face_lights: &'a wgpu::Buffer,
+    /// The faces' visibility words, back to back (two `u32` a texel: id, depth).
+    pub vis: &'a wgpu::Buffer,
+    /// The faces' G-buffer records, back to back: a G-buffer layer [`RSM_RESOLUTION`] wide and
+    /// `RSM_RESOLUTION * face_count` high.
+    pub records: &'a wgpu::Buffer,
+    /// How many faces.
+    pub face_count: u32,
+    /// [`RSM_CLUSTERS_PER_FACE`] [`Cluster`]s per face.
+    pub clusters: &'a wgpu::Buffer,
 }
 
 impl Stage for RadiosityStage {
@@ -247,6 +314,42 @@ impl Stage for RadiosityStage {
                 ctx.pipelines
                     .get(ctx.device, "radiosity", "radiosity_gather_listed", &defines, &constants)
                     .dispatch_indirect(ctx.device, &mut pass, &entries, args, 0);
+            }
+            PassId::RadiosityOffscreen => {
+                let (Some(o), Some(rsm)) = (&self.offscreen, &ctx.rsm) else {
+                    unreachable!("the off-screen light runs with the reflective shadow maps")
+                };
+                let vis1 = if ctx.plan.layers == 2 { ctx.raster.vis1() } else { ctx.raster.vis0() };
+                let entries = [
+                    (off::FRAME, ctx.frame),
+                    (off::PARAMS, &o.uniform),
+                    (off::LIGHTS, ctx.scene.light_buffer()),
+                    (off::FACES, rsm.faces),
+                    (off::FACE_LIGHTS, rsm.face_lights),
+                    (off::RSM_VIS, rsm.vis),
+                    (off::RSM, rsm.gbuffer),
+                    (off::VIS0, ctx.raster.vis0()),
+                    (off::VIS1, vis1),
+                    (off::CLUSTERS, &o.clusters),
+                    (off::GBUFFER0, ctx.gbuffer[0]),
+                    (off::RAW, &self.gathered),
+                ];
+                let defines = ctx.settings.precision.defines();
+                let kernel =
+                    |entry| ctx.pipelines.get(ctx.device, "offscreen", entry, &defines, &[]);
+                let cells = RSM_RESOLUTION / 8;
+                kernel("offscreen_clusters").dispatch(
+                    ctx.device,
+                    &mut pass,
+                    &entries,
+                    (o.faces * cells, cells),
+                );
+                kernel("offscreen_add").dispatch_pixels(
+                    ctx.device,
+                    &mut pass,
+                    &entries,
+                    ctx.size(),
+                );
             }
             PassId::RadiosityTemporal => {
                 dispatch(&mut pass, "radiosity_temporal", &entries, &[], ctx.size());

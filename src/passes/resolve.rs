@@ -141,6 +141,19 @@ pub(crate) fn resolve_layer(
     gbuffer: &wgpu::Buffer,
     args: Option<&wgpu::Buffer>,
 ) {
+    resolve_view(ctx, pass, (ctx.frame, ctx.size()), vis, gbuffer, args);
+}
+
+/// [`resolve_layer`] for the view of `frame` (its uniform, and its size in pixels): the camera's
+/// or a reflective shadow map face's.
+pub(crate) fn resolve_view(
+    ctx: &FrameContext<'_>,
+    pass: &mut wgpu::ComputePass<'_>,
+    (frame, size): (&wgpu::Buffer, (u32, u32)),
+    vis: &wgpu::Buffer,
+    gbuffer: &wgpu::Buffer,
+    args: Option<&wgpu::Buffer>,
+) {
     let defines = ctx.settings.precision.defines();
     // The texture code only where the scene's materials may sample textures, the last frame's
     // vertices only where the geometry moved (wgsl/resolve.wgsl), the position encoding in use
@@ -153,7 +166,7 @@ pub(crate) fn resolve_layer(
     let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
     let b = ctx.scene.buffers();
     let entries = [
-        (slot::FRAME, ctx.frame),
+        (slot::FRAME, frame),
         (slot::POSITIONS, &b.positions),
         (slot::NORMALS, &b.normals),
         (slot::UVS, &b.uvs),
@@ -169,6 +182,6 @@ pub(crate) fn resolve_layer(
     ];
     match args {
         Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
-        None => pipeline.dispatch_pixels(ctx.device, pass, &entries, ctx.size()),
+        None => pipeline.dispatch_pixels(ctx.device, pass, &entries, size),
     }
 }

@@ -7,12 +7,18 @@
 //! geometry buffers and the renderer's geometry generation, which
 //! [`Renderer::geometry_changed`](crate::Renderer::geometry_changed) advances. A static scene's
 //! later frames then draw no shadow map.
+//!
+//! Where the plan adds the off-screen light (`radiosity.offscreen`), each face is also drawn at
+//! [`RSM_RESOLUTION`] texels a side and resolved into G-buffer records: the light's reflective
+//! shadow map, what `wgsl/offscreen.wgsl` gathers the light of the surfaces no layer holds from.
+//! It is kept and redrawn with the shadow maps.
 
 use super::direct::ShadowInputs;
 use super::fill::Fill;
 use super::raster::{Draw, RasterMode};
+use super::resolve::resolve_view;
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::{FrameUniform, LightFaces, ShadowFace, light_faces};
+use crate::frame::{FrameUniform, LightFaces, RSM_RESOLUTION, ShadowFace, face, light_faces};
 use crate::gpu;
 use crate::plan::{PassId, Plan};
 use crate::settings::{Settings, ShadowSettings};
@@ -36,16 +42,85 @@ struct Drawn {
     faces: Vec<u8>,
     /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)'s count.
     generation: u64,
+    /// Whether the reflective shadow map was drawn too.
+    rsm: bool,
 }
 
 impl Drawn {
-    fn new(scene: &SceneBuffers, faces: &[(FrameUniform, ShadowFace)], generation: u64) -> Drawn {
+    fn new(
+        scene: &SceneBuffers,
+        faces: &[(FrameUniform, ShadowFace)],
+        generation: u64,
+        plan: &Plan,
+    ) -> Drawn {
         let b = scene.buffers();
         Drawn {
             geometry: [&b.positions, &b.indices, &b.triangle_materials, &b.materials]
                 .map(wgpu::Buffer::clone),
             faces: faces.iter().flat_map(|(u, _)| bytemuck::bytes_of(u).to_vec()).collect(),
             generation,
+            rsm: wants_rsm(plan),
+        }
+    }
+}
+
+/// Whether `plan` reads the reflective shadow maps.
+fn wants_rsm(plan: &Plan) -> bool {
+    plan.contains(&PassId::RadiosityOffscreen)
+}
+
+/// The lights' reflective shadow maps: every face drawn again at [`RSM_RESOLUTION`] and
+/// resolved, and the faces' lookup constants, each face's light, and the faces' visibility
+/// words and G-buffer records back to back.
+struct Rsm {
+    face_uniforms: Vec<wgpu::Buffer>,
+    face_vis: Vec<wgpu::Buffer>,
+    face_gbuffer: Vec<wgpu::Buffer>,
+    fill: Fill,
+    faces: wgpu::Buffer,
+    face_lights: wgpu::Buffer,
+    vis: wgpu::Buffer,
+    gbuffer: wgpu::Buffer,
+}
+
+/// What `wgsl/offscreen.wgsl` reads of the reflective shadow maps.
+#[derive(Clone, Copy)]
+pub(crate) struct RsmInputs<'a> {
+    /// `ShadowFace` per face (at [`RSM_RESOLUTION`], offsets in texels).
+    pub faces: &'a wgpu::Buffer,
+    /// The light of each face.
+    pub face_lights: &'a wgpu::Buffer,
+    /// Every face's visibility words.
+    pub vis: &'a wgpu::Buffer,
+    /// Every face's G-buffer records.
+    pub gbuffer: &'a wgpu::Buffer,
+    /// How many faces.
+    pub count: u32,
+}
+
+impl Rsm {
+    fn new(device: &wgpu::Device, s: &Settings, total: usize) -> Rsm {
+        let texels = u64::from(RSM_RESOLUTION * RSM_RESOLUTION);
+        let vis_bytes = texels * 8;
+        let record_bytes = texels * crate::gbuffer::bytes_per_pixel(s.precision);
+        let storage =
+            |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
+        Rsm {
+            face_uniforms: (0..total)
+                .map(|_| gpu::uniform_buffer_for::<FrameUniform>(device, "deep-gbuffer.rsm.frame"))
+                .collect(),
+            face_vis: (0..total).map(|_| storage("deep-gbuffer.rsm.face", vis_bytes)).collect(),
+            face_gbuffer: (0..total)
+                .map(|_| storage("deep-gbuffer.rsm.records", record_bytes))
+                .collect(),
+            fill: Fill::new(device, vis_bytes, u32::MAX),
+            faces: storage(
+                "deep-gbuffer.rsm.faces",
+                (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64,
+            ),
+            face_lights: storage("deep-gbuffer.rsm.lights", total.max(1) as u64 * 4),
+            vis: storage("deep-gbuffer.rsm.vis", vis_bytes * total.max(1) as u64),
+            gbuffer: storage("deep-gbuffer.rsm.gbuffer", record_bytes * total.max(1) as u64),
         }
     }
 }
@@ -68,6 +143,8 @@ pub(crate) struct ShadowStage {
     faces: wgpu::Buffer,
     light_faces: wgpu::Buffer,
     atlas: wgpu::Buffer,
+    /// The reflective shadow maps, made by the first plan that reads them.
+    rsm: Option<Rsm>,
 }
 
 impl ShadowStage {
@@ -80,12 +157,15 @@ impl ShadowStage {
         plan: &Plan,
     ) -> Result<ShadowStage> {
         let key = key(plan);
-        match kept {
-            Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => {
-                Ok(stage)
-            }
-            _ => Self::new(device, s, scene, key),
+        let mut stage = match kept {
+            Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => stage,
+            _ => Self::new(device, s, scene, key)?,
+        };
+        if wants_rsm(plan) && stage.rsm.is_none() {
+            let total = stage.groups.iter().map(|g| g.count).sum();
+            stage.rsm = Some(Rsm::new(device, s, total));
         }
+        Ok(stage)
     }
 
     fn new(
@@ -141,6 +221,7 @@ impl ShadowStage {
                 (info.lights.len().max(2) * 8) as u64,
             ),
             atlas: storage("deep-gbuffer.shadow.atlas", face_bytes * total.max(1) as u64),
+            rsm: None,
         })
     }
 
@@ -165,6 +246,38 @@ impl ShadowStage {
             queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
         }
         queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces_words));
+        if let Some(rsm) = &self.rsm {
+            let info = scene.info();
+            let bounds = info.bounds.unwrap_or((glam::Vec3::splat(-50.0), glam::Vec3::splat(50.0)));
+            let texels = RSM_RESOLUTION * RSM_RESOLUTION;
+            let (mut faces, mut lights) = (Vec::new(), Vec::new());
+            for group in &self.groups {
+                let cameras = crate::frame::face_cameras(&info.lights[group.light], bounds);
+                for (k, camera) in cameras.iter().enumerate() {
+                    let index = group.first + k;
+                    let (uniform, lookup) =
+                        face(camera, RSM_RESOLUTION, index as u32 * texels, scene.counts());
+                    queue.write_buffer(&rsm.face_uniforms[index], 0, bytemuck::bytes_of(&uniform));
+                    faces.push(lookup);
+                    lights.push(group.light as u32);
+                }
+            }
+            if !faces.is_empty() {
+                queue.write_buffer(&rsm.faces, 0, bytemuck::cast_slice(&faces));
+                queue.write_buffer(&rsm.face_lights, 0, bytemuck::cast_slice(&lights));
+            }
+        }
+    }
+
+    /// What the off-screen light reads, when the stage has reflective shadow maps.
+    pub(crate) fn rsm_inputs(&self) -> Option<RsmInputs<'_>> {
+        self.rsm.as_ref().map(|r| RsmInputs {
+            faces: &r.faces,
+            face_lights: &r.face_lights,
+            vis: &r.vis,
+            gbuffer: &r.gbuffer,
+            count: r.face_vis.len() as u32,
+        })
     }
 
     /// The lights of `plan` whose faces, drawn by an earlier frame, still hold for `scene` under
@@ -183,7 +296,7 @@ impl ShadowStage {
             .iter()
             .filter(|faces| {
                 self.groups.iter().find(|g| g.light == faces.light).is_some_and(|g| {
-                    g.drawn.as_ref() == Some(&Drawn::new(scene, &faces.faces, generation))
+                    g.drawn.as_ref() == Some(&Drawn::new(scene, &faces.faces, generation, plan))
                 })
             })
             .map(|faces| faces.light)
@@ -200,7 +313,7 @@ impl ShadowStage {
             if let Some(group) = self.groups.iter_mut().find(|g| g.light == faces.light)
                 && drawn
             {
-                group.drawn = Some(Drawn::new(scene, &faces.faces, generation));
+                group.drawn = Some(Drawn::new(scene, &faces.faces, generation, plan));
             }
         }
     }
@@ -234,11 +347,45 @@ impl Stage for ShadowStage {
                 };
                 ctx.raster.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
             }
+            if let Some(rsm) = self.rsm.as_ref().filter(|_| wants_rsm(ctx.plan)) {
+                for face in faces.clone() {
+                    let (uniform, vis) = (&rsm.face_uniforms[face], &rsm.face_vis[face]);
+                    rsm.fill.record(ctx.device, ctx.pipelines, &mut pass, vis);
+                    let step = Draw { vis0: Some(vis), ..Draw::new(uniform, RasterMode::Layer0) };
+                    ctx.raster.rasterizer.draw(
+                        ctx.device,
+                        ctx.pipelines,
+                        &mut pass,
+                        ctx.scene,
+                        step,
+                    );
+                    let size = (RSM_RESOLUTION, RSM_RESOLUTION);
+                    resolve_view(
+                        ctx,
+                        &mut pass,
+                        (uniform, size),
+                        vis,
+                        &rsm.face_gbuffer[face],
+                        None,
+                    );
+                }
+            }
         }
-        for face in faces {
+        for face in faces.clone() {
             let vis = &self.face_vis[face];
             let bytes = vis.size();
             rec.encoder().copy_buffer_to_buffer(vis, 0, &self.atlas, face as u64 * bytes, bytes);
+        }
+        if let Some(rsm) = self.rsm.as_ref().filter(|_| wants_rsm(ctx.plan)) {
+            for face in faces {
+                let encoder = rec.encoder();
+                for (from, to) in
+                    [(&rsm.face_vis[face], &rsm.vis), (&rsm.face_gbuffer[face], &rsm.gbuffer)]
+                {
+                    let bytes = from.size();
+                    encoder.copy_buffer_to_buffer(from, 0, to, face as u64 * bytes, bytes);
+                }
+            }
         }
     }
 }

@@ -1,0 +1,211 @@
+//! CPU reference of `wgsl/offscreen.wgsl`: the clusters of the reflective shadow maps' texels
+//! that no layer holds, and their light added to the gather.
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
+
+use crate::cpu::direct::light_at;
+use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::spiral::pixels_per_unit;
+use crate::frame::{
+    Cluster, FrameUniform, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, ShadowFace,
+};
+use crate::gbuffer::GSample;
+use crate::scene::GpuLight;
+
+/// `HELD_MARGIN` of the kernel.
+const HELD_MARGIN: f32 = 0.1;
+/// The empty visibility word's depth half.
+const VIS_EMPTY: u32 = u32::MAX;
+
+/// What the cluster kernel reads: the camera's frame and constants, the lights, and the
+/// reflective shadow maps.
+pub struct Rsm<'a> {
+    /// The camera's frame.
+    pub frame: &'a FrameUniform,
+    /// The kernel's constants.
+    pub params: &'a OffscreenUniform,
+    /// The scene's lights.
+    pub lights: &'a [GpuLight],
+    /// Each face's lookup constants (offsets in texels).
+    pub faces: &'a [ShadowFace],
+    /// The light of each face.
+    pub face_lights: &'a [u32],
+    /// The faces' visibility words (two `u32` a texel: id, depth).
+    pub vis: &'a [u32],
+    /// The faces' G-buffer records, decoded.
+    pub records: &'a [GSample],
+    /// This frame's visibility words of layer 0 and layer 1.
+    pub layers: [&'a [u32]; 2],
+}
+
+impl Rsm<'_> {
+    /// As `held_tolerance`.
+    fn held_tolerance(&self, v: Vec3, n: Vec3, z: f32) -> f32 {
+        let ray = if self.frame.ortho == 0 { v.normalize() } else { Vec3::NEG_Z };
+        let cos_v = n.normalize().dot(ray).abs().clamp(0.0995, 1.0);
+        let slope = (1.0 - cos_v * cos_v).sqrt() / cos_v;
+        2.0 * slope / pixels_per_unit(self.frame, z.max(1e-6)) + 1e-3 * z
+    }
+
+    /// As `unheld`: the share of the world point (normal `n`) the clusters carry.
+    fn unheld(&self, world: Vec3, n: Vec3) -> f32 {
+        let f = self.frame;
+        let v = mat_mul(&f.view, world.extend(1.0).to_array());
+        let c = mat_mul(&f.proj, v.to_array());
+        if c.w.is_nan() || c.w <= 0.0 {
+            return 1.0;
+        }
+        let size = Vec2::new(f.width as f32, f.height as f32);
+        let px = Vec2::new((c.x / c.w * 0.5 + 0.5) * size.x, (0.5 - c.y / c.w * 0.5) * size.y);
+        if !(px.x >= 0.0 && px.y >= 0.0 && px.x < size.x && px.y < size.y) {
+            return 1.0;
+        }
+        let z = -v.z;
+        let q = (px.y as u32 * f.width + px.x as u32) as usize;
+        let n_view = mat_mul(&f.view, n.extend(0.0).to_array()).xyz();
+        let tolerance = self.held_tolerance(v.xyz(), n_view, z);
+        let near = |layer: &[u32]| {
+            let bits = layer[2 * q + 1];
+            bits != VIS_EMPTY && (f32::from_bits(bits) - z).abs() <= tolerance
+        };
+        let held = near(self.layers[0]) || (self.params.layers == 2 && near(self.layers[1]));
+        if !held {
+            return 1.0;
+        }
+        let edge = px.x.min(size.x - px.x).min(px.y.min(size.y - px.y));
+        (1.0 - edge / (HELD_MARGIN * size.y).max(1e-6)).clamp(0.0, 1.0)
+    }
+
+    /// One texel's share of its cluster: flux, area, area times point, area times normal.
+    fn texel(&self, face: usize, (x, y): (u32, u32)) -> Option<(Vec3, f32, Vec3, Vec3)> {
+        let f = &self.faces[face];
+        let t = (f.offset + y * RSM_RESOLUTION + x) as usize;
+        let depth_bits = self.vis[2 * t + 1];
+        let s = &self.records[t];
+        if depth_bits == VIS_EMPTY || s.depth.is_nan() || s.depth <= 0.0 {
+            return None;
+        }
+        let depth = f32::from_bits(depth_bits);
+        let res = RSM_RESOLUTION as f32;
+        let ndc = Vec2::new((x as f32 + 0.5) / res * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / res * 2.0);
+        let (v, perpendicular) = if f.ortho != 0 {
+            let v = Vec3::new(
+                (ndc.x - f.proj[3][0]) / f.proj[0][0],
+                (ndc.y - f.proj[3][1]) / f.proj[1][1],
+                -depth,
+            );
+            (v, f.texel * f.texel)
+        } else {
+            let unit = Vec3::new(ndc.x / f.proj[0][0], ndc.y / f.proj[1][1], -1.0);
+            (unit * depth, f.texel * f.texel * depth * depth / unit.length())
+        };
+        let u = v - Vec3::from_slice(&f.view[3][..3]);
+        let column = |k: usize| Vec3::from_slice(&f.view[k][..3]);
+        let world = Vec3::new(column(0).dot(u), column(1).dot(u), column(2).dot(u));
+        let (e, l) = light_at(&self.lights[self.face_lights[face] as usize], world);
+        let cos_l = s.normal.dot(l).max(0.0);
+        let a = perpendicular / cos_l.max(0.1);
+        let reflected = (1.0 - s.metallic) * s.occlusion * s.base_color / PI
+            * e
+            * perpendicular
+            * (cos_l / 0.1).min(1.0);
+        let sent = reflected + s.emissive * a;
+        let finite = sent.abs().max_element() <= 3.0e38 && a <= 3.0e38 && world.is_finite();
+        let weight = self.unheld(world, s.normal);
+        (finite && weight > 0.0).then(|| {
+            let area = a * weight;
+            (sent * weight, area, world * area, s.normal * area)
+        })
+    }
+
+    /// As `offscreen_clusters`: every face's clusters, [`RSM_CLUSTERS_PER_FACE`] each.
+    pub fn clusters(&self) -> Vec<Cluster> {
+        let cells = RSM_RESOLUTION / 8;
+        let mut out = Vec::new();
+        for face in 0..self.params.faces as usize {
+            for cy in 0..cells {
+                for cx in 0..cells {
+                    let (mut flux, mut area, mut point, mut normal) =
+                        (Vec3::ZERO, 0.0f32, Vec3::ZERO, Vec3::ZERO);
+                    for ly in 0..8 {
+                        for lx in 0..8 {
+                            if let Some((f, a, p, n)) = self.texel(face, (cx * 8 + lx, cy * 8 + ly))
+                            {
+                                flux += f;
+                                area += a;
+                                point += p;
+                                normal += n;
+                            }
+                        }
+                    }
+                    let mut c = Cluster::default();
+                    if area > 0.0 && area <= 3.0e38 {
+                        c.position = (point / area).to_array();
+                        c.area = area;
+                        c.normal = (normal / area).to_array();
+                        c.flux = flux.to_array();
+                    }
+                    out.push(c);
+                }
+            }
+        }
+        debug_assert_eq!(out.len(), (self.params.faces * RSM_CLUSTERS_PER_FACE) as usize);
+        out
+    }
+}
+
+/// As `offscreen_add`: the gather's irradiance and coverage `raw` with the light of `clusters`
+/// added at every layer-0 point of `layer0`.
+pub fn add(
+    f: &FrameUniform,
+    u: &OffscreenUniform,
+    clusters: &[Cluster],
+    layer0: &[GSample],
+    raw: &[Vec4],
+) -> Vec<Vec4> {
+    let mut out = raw.to_vec();
+    let stride = u.stride.max(1);
+    let count = (u.faces * RSM_CLUSTERS_PER_FACE) as usize;
+    for y in 0..f.height {
+        for x in 0..f.width {
+            let p = (y * f.width + x) as usize;
+            let s = &layer0[p];
+            if s.depth.is_nan() || s.depth <= 0.0 {
+                continue;
+            }
+            let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+            let at = mat_mul(&f.inv_view, c.extend(1.0).to_array()).xyz();
+            let phase = ((x & 3) + 4 * (y & 3) + u.turn) % stride;
+            let (mut e, mut covered) = (Vec3::ZERO, 0.0f32);
+            for cluster in clusters[..count].iter().skip(phase as usize).step_by(stride as usize) {
+                if cluster.area.is_nan() || cluster.area <= 0.0 {
+                    continue;
+                }
+                let d = Vec3::from(cluster.position) - at;
+                let d2 = d.dot(d);
+                if d2.is_nan() || d2 <= 0.0 {
+                    continue;
+                }
+                let w = d / d2.sqrt();
+                let (cos_x, cos_p) = (s.normal.dot(w), -Vec3::from(cluster.normal).dot(w));
+                if cos_x <= 0.0 || cos_p <= 0.0 {
+                    continue;
+                }
+                let g = cos_x * cos_p / (d2 + cluster.area / PI);
+                e += Vec3::from(cluster.flux) * g;
+                covered += cluster.area * g / PI;
+            }
+            let g = raw[p];
+            let open = (1.0 - g.w).clamp(0.0, 1.0);
+            let share = covered * stride as f32;
+            let scale = if share > open { stride as f32 * open / share } else { stride as f32 };
+            let sum = g.xyz() + e * scale;
+            if sum.abs().max_element() <= 3.0e38 {
+                out[p] = sum.extend((g.w + covered * scale).min(1.0));
+            }
+        }
+    }
+    out
+}
