@@ -131,6 +131,10 @@ struct SweepArgs {
     /// Radiosity resolution divisors to sweep (1, 2, 4).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_downsample))]
     radiosity_downsample: Vec<u32>,
+    /// The off-screen light (the reflective shadow maps' clusters) on, off or both, as
+    /// `true,false`.
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_offscreen))]
+    radiosity_offscreen: Vec<bool>,
     /// Rays through the lens per pixel to sweep (the depth of field runs when --camera gives an
     /// aperture; the truth then samples the lens).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dof_samples))]
@@ -866,6 +870,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_mip_offset: args.radiosity_mip_offset,
         ao_downsample: args.ao_downsample,
         radiosity_downsample: args.radiosity_downsample,
+        radiosity_offscreen: args.radiosity_offscreen,
         dof_samples: args.dof_samples,
         transparency_layers: args.transparency_layers,
         shutter: args.shutter,

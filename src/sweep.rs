@@ -69,6 +69,9 @@ pub struct Knobs {
     pub ao_downsample: u32,
     /// Radiosity resolution divisor ([`RadiositySettings::downsample`]).
     pub radiosity_downsample: u32,
+    /// The light of the surfaces no layer holds, from the reflective shadow maps
+    /// ([`RadiositySettings::offscreen`]).
+    pub radiosity_offscreen: bool,
     /// Rays through the lens per pixel ([`DofSettings::samples`]; the depth of field runs when
     /// the sweep's camera has an aperture).
     pub dof_samples: u32,
@@ -124,6 +127,7 @@ impl Knobs {
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
                 downsample: self.radiosity_downsample,
+                offscreen: self.radiosity_offscreen,
                 ..base.radiosity.clone()
             },
             timings: true,
@@ -190,6 +194,8 @@ pub struct Grid {
     pub ao_downsample: Vec<u32>,
     /// Radiosity resolution divisors.
     pub radiosity_downsample: Vec<u32>,
+    /// The off-screen light on or off.
+    pub radiosity_offscreen: Vec<bool>,
     /// Rays through the lens per pixel.
     pub dof_samples: Vec<u32>,
     /// Transparency layers (peels).
@@ -228,6 +234,7 @@ impl Default for Grid {
             radiosity_mip_offset: vec![settings.radiosity.mip_offset],
             ao_downsample: vec![settings.ao.downsample],
             radiosity_downsample: vec![settings.radiosity.downsample],
+            radiosity_offscreen: vec![settings.radiosity.offscreen],
             dof_samples: vec![settings.dof.samples],
             transparency_layers: vec![settings.transparency.layers],
             shutter: vec![settings.motion_blur.shutter],
@@ -271,6 +278,7 @@ impl Grid {
             radiosity_mip_offset: settings.radiosity.mip_offset,
             ao_downsample: settings.ao.downsample,
             radiosity_downsample: settings.radiosity.downsample,
+            radiosity_offscreen: settings.radiosity.offscreen,
             dof_samples: settings.dof.samples,
             transparency_layers: settings.transparency.layers,
             shutter: settings.motion_blur.shutter,
@@ -288,6 +296,7 @@ impl Grid {
         let k = times(k, &self.radiosity_mip_offset, |k, v| k.radiosity_mip_offset = v);
         let k = times(k, &self.ao_downsample, |k, v| k.ao_downsample = v);
         let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
+        let k = times(k, &self.radiosity_offscreen, |k, v| k.radiosity_offscreen = v);
         let k = times(k, &self.dof_samples, |k, v| k.dof_samples = v);
         let k = times(k, &self.transparency_layers, |k, v| k.transparency_layers = v);
         let k = times(k, &self.shutter, |k, v| k.shutter = v);
@@ -604,7 +613,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -627,7 +636,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -642,6 +651,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_mip_offset,
             k.ao_downsample,
             k.radiosity_downsample,
+            k.radiosity_offscreen,
             k.dof_samples,
             k.transparency_layers,
             k.shutter,
@@ -700,7 +710,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 17] = [
+    let optional: [Column; 18] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("radiosity slices", |k| k.radiosity_slices.to_string()),
@@ -712,6 +722,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
         ("AO downsample", |k| k.ao_downsample.to_string()),
         ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
+        ("off-screen light", |k| k.radiosity_offscreen.to_string()),
         ("lens rays", |k| k.dof_samples.to_string()),
         ("transparency layers", |k| k.transparency_layers.to_string()),
         ("shutter", |k| k.shutter.to_string()),

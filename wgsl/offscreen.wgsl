@@ -22,8 +22,9 @@
 //   mean point and normal (not renormalized: a cluster of patches facing many ways sends less
 //   towards any one).
 // offscreen_add: at each layer-0 point X (normal n_X) with the gather's irradiance E and
-//   coverage c, over the clusters (x, y) mod 4 picks of `stride` (turned every frame, weighted
-//   by stride; the blur and the temporal filter join them),
+//   coverage c, over the clusters that hold a texel (offscreen_compact lists them in order) of
+//   which (x, y) mod 4 picks one in `stride`, about 32 (turned every frame, weighted by stride;
+//   the blur and the temporal filter join them),
 //     E_off = sum flux (n_X . w) (-n . w) / (d^2 + A / pi),  c_off = sum A (n_X . w) (-n . w) / (pi (d^2 + A / pi)),
 //   w the unit direction from X to the cluster and d its distance: each cluster a disc of area A
 //   (bounded as a disc is where d is small), its light arriving at the cosine-weighted solid
@@ -47,12 +48,11 @@
 struct Offscreen {
     // Faces of every shadow-casting light, RSM_RESOLUTION texels a side each.
     faces: u32,
-    // One in `stride` clusters per pixel (1, 2, 4, 8 or 16).
-    stride: u32,
     // Frames since the radiosity's history began: turns which clusters a pixel takes.
     turn: u32,
     // Whether this frame has layer 1 (its depths bound as vis1).
     layers: u32,
+    _pad: u32,
 }
 
 // Texels a face side, and a cluster's side in texels (a workgroup).
@@ -91,6 +91,21 @@ struct Cluster {
 @group(0) @binding(9) var<storage, read_write> clusters: array<Cluster>;
 @group(0) @binding(10) var<storage, read> gbuffer0: array<GWord>;
 @group(0) @binding(11) var<storage, read_write> raw: array<vec4<f32>>;
+// The clusters that hold a texel, in cluster order, and ([0]) how many.
+@group(0) @binding(12) var<storage, read_write> lit: array<Cluster>;
+@group(0) @binding(13) var<storage, read_write> lit_count: array<u32>;
+
+// Clusters a pixel sums, about: one in `stride` of them (1, 2, 4, 8 or 16, as many as the
+// 4x4 turns of a block hold).
+const CLUSTERS_PER_PIXEL: u32 = 32u;
+
+fn stride_for(count: u32) -> u32 {
+    var stride = 1u;
+    while stride < 16u && stride * CLUSTERS_PER_PIXEL < count {
+        stride *= 2u;
+    }
+    return stride;
+}
 
 fn rsm_sample(t: u32) -> GSample {
 #if PACKED
@@ -229,6 +244,43 @@ fn offscreen_clusters(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
     }
 }
 
+var<workgroup> scan: array<u32, 64>;
+
+// The clusters that hold a texel, in order: one workgroup scans them 64 at a time.
+@compute @workgroup_size(64)
+fn offscreen_compact(@builtin(local_invocation_index) li: u32) {
+    let count = params.faces * CLUSTERS_PER_FACE;
+    var base = 0u;
+    for (var start = 0u; start < count; start += 64u) {
+        let k = start + li;
+        var c = Cluster(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
+        var flag = 0u;
+        if k < count {
+            c = clusters[k];
+            flag = u32(c.area > 0.0);
+        }
+        scan[li] = flag;
+        for (var d = 1u; d < 64u; d <<= 1u) {
+            workgroupBarrier();
+            var v = scan[li];
+            if li >= d {
+                v += scan[li - d];
+            }
+            workgroupBarrier();
+            scan[li] = v;
+        }
+        workgroupBarrier();
+        if flag != 0u {
+            lit[base + scan[li] - 1u] = c;
+        }
+        base += scan[63];
+        workgroupBarrier();
+    }
+    if li == 0u {
+        lit_count[0] = base;
+    }
+}
+
 @compute @workgroup_size(8, 8)
 fn offscreen_add(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
@@ -241,16 +293,13 @@ fn offscreen_add(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let x = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(gid.xy) + 0.5, s.depth), 1.0)).xyz;
     let n = s.normal;
-    let stride = max(params.stride, 1u);
+    let count = lit_count[0];
+    let stride = stride_for(count);
     let phase = ((gid.x & 3u) + 4u * (gid.y & 3u) + params.turn) % stride;
-    let count = params.faces * CLUSTERS_PER_FACE;
     var e = vec3<f32>(0.0);
     var covered = 0.0;
     for (var k = phase; k < count; k += stride) {
-        let c = clusters[k];
-        if !(c.area > 0.0) {
-            continue;
-        }
+        let c = lit[k];
         let d = c.position - x;
         let d2 = dot(d, d);
         if !(d2 > 0.0) {

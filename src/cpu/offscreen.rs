@@ -156,8 +156,17 @@ impl Rsm<'_> {
     }
 }
 
-/// As `offscreen_add`: the gather's irradiance and coverage `raw` with the light of `clusters`
-/// added at every layer-0 point of `layer0`.
+/// As `stride_for`: a pixel sums one in this many of `count` clusters.
+pub fn stride_for(count: usize) -> usize {
+    let mut stride = 1;
+    while stride < 16 && stride * 32 < count {
+        stride *= 2;
+    }
+    stride
+}
+
+/// As `offscreen_compact` and `offscreen_add`: the gather's irradiance and coverage `raw` with
+/// the light of the `clusters` that hold a texel added at every layer-0 point of `layer0`.
 pub fn add(
     f: &FrameUniform,
     u: &OffscreenUniform,
@@ -165,9 +174,10 @@ pub fn add(
     layer0: &[GSample],
     raw: &[Vec4],
 ) -> Vec<Vec4> {
-    let mut out = raw.to_vec();
-    let stride = u.stride.max(1);
     let count = (u.faces * RSM_CLUSTERS_PER_FACE) as usize;
+    let lit: Vec<&Cluster> = clusters[..count].iter().filter(|c| c.area > 0.0).collect();
+    let stride = stride_for(lit.len());
+    let mut out = raw.to_vec();
     for y in 0..f.height {
         for x in 0..f.width {
             let p = (y * f.width + x) as usize;
@@ -177,12 +187,9 @@ pub fn add(
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
             let at = mat_mul(&f.inv_view, c.extend(1.0).to_array()).xyz();
-            let phase = ((x & 3) + 4 * (y & 3) + u.turn) % stride;
+            let phase = ((x & 3) + 4 * (y & 3) + u.turn) as usize % stride;
             let (mut e, mut covered) = (Vec3::ZERO, 0.0f32);
-            for cluster in clusters[..count].iter().skip(phase as usize).step_by(stride as usize) {
-                if cluster.area.is_nan() || cluster.area <= 0.0 {
-                    continue;
-                }
+            for cluster in lit.iter().skip(phase).step_by(stride) {
                 let d = Vec3::from(cluster.position) - at;
                 let d2 = d.dot(d);
                 if d2.is_nan() || d2 <= 0.0 {

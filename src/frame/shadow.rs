@@ -153,25 +153,19 @@ pub const RSM_CLUSTERS_PER_FACE: u32 = 64;
 pub struct OffscreenUniform {
     /// Reflective shadow map faces of every shadow-casting light.
     pub faces: u32,
-    /// Each pixel sums one in `stride` clusters (1, 2, 4, 8 or 16).
-    pub stride: u32,
     /// Frames since the radiosity's history began (turns which clusters a pixel sums).
     pub turn: u32,
     /// The frame's layers (layer 1's depths are read with 2).
     pub layers: u32,
+    pub _pad: u32,
 }
 
-mirrored!(OffscreenUniform, "offscreen.wgsl", "Offscreen", [faces, stride, turn, layers]);
+mirrored!(OffscreenUniform, "offscreen.wgsl", "Offscreen", [faces, turn, layers]);
 
 impl OffscreenUniform {
-    /// Clusters a pixel sums at most, about: the stride follows the count.
-    pub const CLUSTERS_PER_PIXEL: u32 = 32;
-
     /// The constants for `faces` faces, the radiosity's `turn` and the frame's `layers`.
     pub fn new(faces: u32, turn: u32, layers: u32) -> Self {
-        let clusters = faces * RSM_CLUSTERS_PER_FACE;
-        let stride = clusters.div_ceil(Self::CLUSTERS_PER_PIXEL).next_power_of_two().min(16);
-        OffscreenUniform { faces, stride, turn, layers }
+        OffscreenUniform { faces, turn, layers, _pad: 0 }
     }
 }
 

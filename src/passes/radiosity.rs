@@ -85,6 +85,9 @@ pub(crate) struct RadiosityStage {
 struct Offscreen {
     uniform: wgpu::Buffer,
     clusters: wgpu::Buffer,
+    /// The clusters that hold a texel, in order, and their count.
+    lit: wgpu::Buffer,
+    lit_count: wgpu::Buffer,
     faces: u32,
 }
 
@@ -172,6 +175,18 @@ impl RadiosityStage {
                         device,
                         "deep-gbuffer.offscreen.clusters",
                         clusters * std::mem::size_of::<Cluster>() as u64,
+                        wgpu::BufferUsages::empty(),
+                    ),
+                    lit: gpu::storage_buffer(
+                        device,
+                        "deep-gbuffer.offscreen.lit",
+                        clusters * std::mem::size_of::<Cluster>() as u64,
+                        wgpu::BufferUsages::empty(),
+                    ),
+                    lit_count: gpu::storage_buffer(
+                        device,
+                        "deep-gbuffer.offscreen.count",
+                        16,
                         wgpu::BufferUsages::empty(),
                     ),
                     faces: offscreen,
@@ -333,6 +348,8 @@ impl Stage for RadiosityStage {
                     (off::CLUSTERS, &o.clusters),
                     (off::GBUFFER0, ctx.gbuffer[0]),
                     (off::RAW, &self.gathered),
+                    (off::LIT, &o.lit),
+                    (off::LIT_COUNT, &o.lit_count),
                 ];
                 let defines = ctx.settings.precision.defines();
                 let kernel =
@@ -344,6 +361,7 @@ impl Stage for RadiosityStage {
                     &entries,
                     (o.faces * cells, cells),
                 );
+                kernel("offscreen_compact").dispatch(ctx.device, &mut pass, &entries, (1, 1));
                 kernel("offscreen_add").dispatch_pixels(
                     ctx.device,
                     &mut pass,
