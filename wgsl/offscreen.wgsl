@@ -39,6 +39,7 @@
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
+#include "shared/gbuffer_read.wgsl"
 #include "shared/light.wgsl"
 #include "shared/shadow.wgsl"
 #include "shared/spiral.wgsl"
@@ -89,7 +90,8 @@ struct Cluster {
 @group(0) @binding(7) var<storage, read> vis0: array<u32>;
 @group(0) @binding(8) var<storage, read> vis1: array<u32>;
 @group(0) @binding(9) var<storage, read_write> clusters: array<Cluster>;
-@group(0) @binding(10) var<storage, read> gbuffer0: array<GWord>;
+// This frame's layer 0, the points that receive the clusters' light (read by sample_at).
+@group(0) @binding(10) var<storage, read> gbuffer: array<GWord>;
 @group(0) @binding(11) var<storage, read_write> raw: array<vec4<f32>>;
 // The clusters that hold a texel, in cluster order, and ([0]) how many.
 @group(0) @binding(12) var<storage, read_write> lit: array<Cluster>;
@@ -112,14 +114,6 @@ fn rsm_sample(t: u32) -> GSample {
     return gbuffer_decode(rsm[t * G_WORDS], rsm[t * G_WORDS + 1u]);
 #else
     return gbuffer_decode(rsm[t * G_WORDS], rsm[t * G_WORDS + 1u], rsm[t * G_WORDS + 2u], rsm[t * G_WORDS + 3u]);
-#endif
-}
-
-fn sample0(p: u32) -> GSample {
-#if PACKED
-    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u]);
-#else
-    return gbuffer_decode(gbuffer0[p * G_WORDS], gbuffer0[p * G_WORDS + 1u], gbuffer0[p * G_WORDS + 2u], gbuffer0[p * G_WORDS + 3u]);
 #endif
 }
 
@@ -287,7 +281,7 @@ fn offscreen_add(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = gid.y * frame.width + gid.x;
-    let s = sample0(p);
+    let s = sample_at(p);
     if !(s.depth > 0.0) {
         return;
     }

@@ -346,7 +346,7 @@ impl Stage for RadiosityStage {
                     (off::VIS0, ctx.raster.vis0()),
                     (off::VIS1, vis1),
                     (off::CLUSTERS, &o.clusters),
-                    (off::GBUFFER0, ctx.gbuffer[0]),
+                    (off::GBUFFER, ctx.gbuffer[0]),
                     (off::RAW, &self.gathered),
                     (off::LIT, &o.lit),
                     (off::LIT_COUNT, &o.lit_count),

@@ -18,7 +18,7 @@ use super::fill::Fill;
 use super::raster::{Draw, RasterMode};
 use super::resolve::resolve_view;
 use super::{FrameContext, Recorder, Stage};
-use crate::frame::{FrameUniform, LightFaces, RSM_RESOLUTION, ShadowFace, face, light_faces};
+use crate::frame::{FrameUniform, LightFaces, RSM_RESOLUTION, ShadowFace, light_faces};
 use crate::gpu;
 use crate::plan::{PassId, Plan};
 use crate::settings::{Settings, ShadowSettings};
@@ -69,18 +69,85 @@ fn wants_rsm(plan: &Plan) -> bool {
     plan.contains(&PassId::RadiosityOffscreen)
 }
 
-/// The lights' reflective shadow maps: every face drawn again at [`RSM_RESOLUTION`] and
-/// resolved, and the faces' lookup constants, each face's light, and the faces' visibility
-/// words and G-buffer records back to back.
-struct Rsm {
-    face_uniforms: Vec<wgpu::Buffer>,
-    face_vis: Vec<wgpu::Buffer>,
-    face_gbuffer: Vec<wgpu::Buffer>,
+/// Faces drawn from the lights by the rasterizer at one resolution, in atlas order: a frame
+/// uniform and a visibility buffer per face, the faces' lookup constants (`ShadowFace`, offsets
+/// in texels) and their visibility words back to back (the atlas). The shadow maps are one
+/// set, the reflective shadow maps another.
+struct Faces {
+    resolution: u32,
+    uniforms: Vec<wgpu::Buffer>,
+    vis: Vec<wgpu::Buffer>,
     fill: Fill,
-    faces: wgpu::Buffer,
+    lookup: wgpu::Buffer,
+    atlas: wgpu::Buffer,
+}
+
+impl Faces {
+    /// `total` faces of `resolution` texels a side, labelled `deep-gbuffer.<what>.*`.
+    fn new(device: &wgpu::Device, what: &str, resolution: u32, total: usize) -> Faces {
+        let bytes = ShadowSettings::atlas_bytes(resolution, 1);
+        let label = |part: &str| format!("deep-gbuffer.{what}.{part}");
+        let storage = |part: &str, size| {
+            gpu::storage_buffer(device, &label(part), size, wgpu::BufferUsages::empty())
+        };
+        Faces {
+            resolution,
+            uniforms: (0..total)
+                .map(|_| gpu::uniform_buffer_for::<FrameUniform>(device, &label("frame")))
+                .collect(),
+            vis: (0..total).map(|_| storage("face", bytes)).collect(),
+            fill: Fill::new(device, bytes, u32::MAX),
+            lookup: storage("faces", (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64),
+            atlas: storage("atlas", bytes * total.max(1) as u64),
+        }
+    }
+
+    /// Every shadow-casting light's faces of `scene` at this set's resolution.
+    fn of(&self, scene: &SceneBuffers) -> Vec<LightFaces> {
+        light_faces(scene.info(), self.resolution, scene.counts())
+    }
+
+    /// Writes every face's camera and lookup constants (lights or bounds may have changed);
+    /// returns the faces of each light.
+    fn prepare(&self, queue: &wgpu::Queue, scene: &SceneBuffers) -> Vec<LightFaces> {
+        let groups = self.of(scene);
+        let mut lookup = Vec::new();
+        for group in &groups {
+            for (k, (uniform, face)) in group.faces.iter().enumerate() {
+                let buffer = &self.uniforms[group.first + k];
+                queue.write_buffer(buffer, 0, bytemuck::bytes_of(uniform));
+                lookup.push(*face);
+            }
+        }
+        if !lookup.is_empty() {
+            queue.write_buffer(&self.lookup, 0, bytemuck::cast_slice(&lookup));
+        }
+        groups
+    }
+
+    /// Records the depth of face `face` into its visibility buffer.
+    fn draw(&self, ctx: &FrameContext<'_>, pass: &mut wgpu::ComputePass<'_>, face: usize) {
+        let vis = &self.vis[face];
+        self.fill.record(ctx.device, ctx.pipelines, pass, vis);
+        let step = Draw { vis0: Some(vis), ..Draw::new(&self.uniforms[face], RasterMode::Layer0) };
+        ctx.raster.rasterizer.draw(ctx.device, ctx.pipelines, pass, ctx.scene, step);
+    }
+
+    /// Copies face `face`'s visibility words into the atlas.
+    fn copy(&self, encoder: &mut wgpu::CommandEncoder, face: usize) {
+        let vis = &self.vis[face];
+        let bytes = vis.size();
+        encoder.copy_buffer_to_buffer(vis, 0, &self.atlas, face as u64 * bytes, bytes);
+    }
+}
+
+/// The lights' reflective shadow maps: every face drawn again at [`RSM_RESOLUTION`] and
+/// resolved into G-buffer records, the records back to back, and each face's light.
+struct Rsm {
+    faces: Faces,
+    records: Vec<wgpu::Buffer>,
+    atlas: wgpu::Buffer,
     face_lights: wgpu::Buffer,
-    vis: wgpu::Buffer,
-    gbuffer: wgpu::Buffer,
 }
 
 /// What `wgsl/offscreen.wgsl` reads of the reflective shadow maps.
@@ -101,26 +168,14 @@ pub(crate) struct RsmInputs<'a> {
 impl Rsm {
     fn new(device: &wgpu::Device, s: &Settings, total: usize) -> Rsm {
         let texels = u64::from(RSM_RESOLUTION * RSM_RESOLUTION);
-        let vis_bytes = texels * 8;
-        let record_bytes = texels * crate::gbuffer::bytes_per_pixel(s.precision);
+        let bytes = texels * crate::gbuffer::bytes_per_pixel(s.precision);
         let storage =
             |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
         Rsm {
-            face_uniforms: (0..total)
-                .map(|_| gpu::uniform_buffer_for::<FrameUniform>(device, "deep-gbuffer.rsm.frame"))
-                .collect(),
-            face_vis: (0..total).map(|_| storage("deep-gbuffer.rsm.face", vis_bytes)).collect(),
-            face_gbuffer: (0..total)
-                .map(|_| storage("deep-gbuffer.rsm.records", record_bytes))
-                .collect(),
-            fill: Fill::new(device, vis_bytes, u32::MAX),
-            faces: storage(
-                "deep-gbuffer.rsm.faces",
-                (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64,
-            ),
+            faces: Faces::new(device, "rsm", RSM_RESOLUTION, total),
+            records: (0..total).map(|_| storage("deep-gbuffer.rsm.records", bytes)).collect(),
+            atlas: storage("deep-gbuffer.rsm.gbuffer", bytes * total.max(1) as u64),
             face_lights: storage("deep-gbuffer.rsm.lights", total.max(1) as u64 * 4),
-            vis: storage("deep-gbuffer.rsm.vis", vis_bytes * total.max(1) as u64),
-            gbuffer: storage("deep-gbuffer.rsm.gbuffer", record_bytes * total.max(1) as u64),
         }
     }
 }
@@ -130,19 +185,14 @@ fn key(plan: &Plan) -> Vec<(usize, String)> {
     plan.shadow_lights().into_iter().map(|(light, name)| (light, name.to_owned())).collect()
 }
 
-/// The faces of every shadow-casting light: a visibility buffer and a camera per face, the
-/// faces' lookup constants and the atlas.
+/// The faces of every shadow-casting light (and, with the off-screen light, their reflective
+/// shadow maps) and the lights' places among them.
 pub(crate) struct ShadowStage {
     /// The plan's shadow lights this stage was made for (it is remade when they change).
     key: Vec<(usize, String)>,
-    resolution: u32,
     groups: Vec<Group>,
-    face_uniforms: Vec<wgpu::Buffer>,
-    face_vis: Vec<wgpu::Buffer>,
-    fill: Fill,
-    faces: wgpu::Buffer,
+    faces: Faces,
     light_faces: wgpu::Buffer,
-    atlas: wgpu::Buffer,
     /// The reflective shadow maps, made by the first plan that reads them.
     rsm: Option<Rsm>,
 }
@@ -158,7 +208,9 @@ impl ShadowStage {
     ) -> Result<ShadowStage> {
         let key = key(plan);
         let mut stage = match kept {
-            Some(stage) if stage.key == key && stage.resolution == s.shadows.resolution => stage,
+            Some(stage) if stage.key == key && stage.faces.resolution == s.shadows.resolution => {
+                stage
+            }
             _ => Self::new(device, s, scene, key)?,
         };
         if wants_rsm(plan) && stage.rsm.is_none() {
@@ -192,78 +244,35 @@ impl ShadowStage {
                 unit: "bytes",
             });
         }
-        let uniform = || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("deep-gbuffer.shadow.frame"),
-                size: std::mem::size_of::<FrameUniform>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
-        let storage =
-            |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
-        let face_vis: Vec<wgpu::Buffer> =
-            (0..total).map(|_| storage("deep-gbuffer.shadow.face", face_bytes)).collect();
-        let fill = Fill::new(device, face_vis.first().map_or(16, wgpu::Buffer::size), u32::MAX);
         Ok(ShadowStage {
             key,
-            resolution: res,
             groups,
-            face_uniforms: (0..total).map(|_| uniform()).collect(),
-            face_vis,
-            fill,
-            faces: storage(
-                "deep-gbuffer.shadow.faces",
-                (total.max(1) * std::mem::size_of::<ShadowFace>()) as u64,
-            ),
-            light_faces: storage(
+            faces: Faces::new(device, "shadow", res, total),
+            light_faces: gpu::storage_buffer(
+                device,
                 "deep-gbuffer.shadow.lights",
                 (info.lights.len().max(2) * 8) as u64,
+                wgpu::BufferUsages::empty(),
             ),
-            atlas: storage("deep-gbuffer.shadow.atlas", face_bytes * total.max(1) as u64),
             rsm: None,
         })
     }
 
-    /// Every shadow-casting light's faces of `scene` at this stage's resolution.
-    fn faces_of(&self, scene: &SceneBuffers) -> Vec<LightFaces> {
-        light_faces(scene.info(), self.resolution, scene.counts())
-    }
-
     /// Writes every face's camera (lights or bounds may have changed).
     pub(crate) fn prepare(&self, queue: &wgpu::Queue, scene: &SceneBuffers) {
-        let mut faces = Vec::new();
         let mut light_faces_words = vec![[0u32; 2]; scene.info().lights.len().max(2)];
-        for group in self.faces_of(scene) {
+        for group in self.faces.prepare(queue, scene) {
             light_faces_words[group.light] = [group.first as u32, group.faces.len() as u32];
-            for (k, (uniform, face)) in group.faces.into_iter().enumerate() {
-                let buffer = &self.face_uniforms[group.first + k];
-                queue.write_buffer(buffer, 0, bytemuck::bytes_of(&uniform));
-                faces.push(face);
-            }
-        }
-        if !faces.is_empty() {
-            queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&faces));
         }
         queue.write_buffer(&self.light_faces, 0, bytemuck::cast_slice(&light_faces_words));
         if let Some(rsm) = &self.rsm {
-            let info = scene.info();
-            let bounds = info.bounds.unwrap_or((glam::Vec3::splat(-50.0), glam::Vec3::splat(50.0)));
-            let texels = RSM_RESOLUTION * RSM_RESOLUTION;
-            let (mut faces, mut lights) = (Vec::new(), Vec::new());
-            for group in &self.groups {
-                let cameras = crate::frame::face_cameras(&info.lights[group.light], bounds);
-                for (k, camera) in cameras.iter().enumerate() {
-                    let index = group.first + k;
-                    let (uniform, lookup) =
-                        face(camera, RSM_RESOLUTION, index as u32 * texels, scene.counts());
-                    queue.write_buffer(&rsm.face_uniforms[index], 0, bytemuck::bytes_of(&uniform));
-                    faces.push(lookup);
-                    lights.push(group.light as u32);
-                }
-            }
-            if !faces.is_empty() {
-                queue.write_buffer(&rsm.faces, 0, bytemuck::cast_slice(&faces));
+            let lights: Vec<u32> = rsm
+                .faces
+                .prepare(queue, scene)
+                .iter()
+                .flat_map(|g| std::iter::repeat_n(g.light as u32, g.faces.len()))
+                .collect();
+            if !lights.is_empty() {
                 queue.write_buffer(&rsm.face_lights, 0, bytemuck::cast_slice(&lights));
             }
         }
@@ -272,11 +281,11 @@ impl ShadowStage {
     /// What the off-screen light reads, when the stage has reflective shadow maps.
     pub(crate) fn rsm_inputs(&self) -> Option<RsmInputs<'_>> {
         self.rsm.as_ref().map(|r| RsmInputs {
-            faces: &r.faces,
+            faces: &r.faces.lookup,
             face_lights: &r.face_lights,
-            vis: &r.vis,
-            gbuffer: &r.gbuffer,
-            count: r.face_vis.len() as u32,
+            vis: &r.faces.atlas,
+            gbuffer: &r.atlas,
+            count: r.records.len() as u32,
         })
     }
 
@@ -289,10 +298,11 @@ impl ShadowStage {
         s: &Settings,
         generation: u64,
     ) -> Vec<usize> {
-        if self.key != key(plan) || self.resolution != s.shadows.resolution {
+        if self.key != key(plan) || self.faces.resolution != s.shadows.resolution {
             return Vec::new();
         }
-        self.faces_of(scene)
+        self.faces
+            .of(scene)
             .iter()
             .filter(|faces| {
                 self.groups.iter().find(|g| g.light == faces.light).is_some_and(|g| {
@@ -305,7 +315,7 @@ impl ShadowStage {
 
     /// Notes that the frame just recorded drew the faces of `plan`'s shadow passes.
     pub(crate) fn drew(&mut self, scene: &SceneBuffers, plan: &Plan, generation: u64) {
-        for faces in self.faces_of(scene) {
+        for faces in self.faces.of(scene) {
             let drawn = plan
                 .passes
                 .iter()
@@ -320,12 +330,16 @@ impl ShadowStage {
 
     /// What the direct kernel reads.
     pub(crate) fn inputs(&self) -> ShadowInputs<'_> {
-        ShadowInputs { faces: &self.faces, light_faces: &self.light_faces, atlas: &self.atlas }
+        ShadowInputs {
+            faces: &self.faces.lookup,
+            light_faces: &self.light_faces,
+            atlas: &self.faces.atlas,
+        }
     }
 
     /// The atlas: every face's visibility words back to back.
     pub(crate) fn atlas(&self) -> &wgpu::Buffer {
-        &self.atlas
+        &self.faces.atlas
     }
 }
 
@@ -336,55 +350,26 @@ impl Stage for ShadowStage {
             unreachable!("the stage was made for the plan's shadow lights")
         };
         let faces = group.first..group.first + group.count;
+        let rsm = self.rsm.as_ref().filter(|_| wants_rsm(ctx.plan));
         {
             let mut pass = rec.pass(id);
             for face in faces.clone() {
-                let vis = &self.face_vis[face];
-                self.fill.record(ctx.device, ctx.pipelines, &mut pass, vis);
-                let step = Draw {
-                    vis0: Some(vis),
-                    ..Draw::new(&self.face_uniforms[face], RasterMode::Layer0)
-                };
-                ctx.raster.rasterizer.draw(ctx.device, ctx.pipelines, &mut pass, ctx.scene, step);
+                self.faces.draw(ctx, &mut pass, face);
             }
-            if let Some(rsm) = self.rsm.as_ref().filter(|_| wants_rsm(ctx.plan)) {
-                for face in faces.clone() {
-                    let (uniform, vis) = (&rsm.face_uniforms[face], &rsm.face_vis[face]);
-                    rsm.fill.record(ctx.device, ctx.pipelines, &mut pass, vis);
-                    let step = Draw { vis0: Some(vis), ..Draw::new(uniform, RasterMode::Layer0) };
-                    ctx.raster.rasterizer.draw(
-                        ctx.device,
-                        ctx.pipelines,
-                        &mut pass,
-                        ctx.scene,
-                        step,
-                    );
-                    let size = (RSM_RESOLUTION, RSM_RESOLUTION);
-                    resolve_view(
-                        ctx,
-                        &mut pass,
-                        (uniform, size),
-                        vis,
-                        &rsm.face_gbuffer[face],
-                        None,
-                    );
-                }
+            for (rsm, face) in rsm.into_iter().flat_map(|r| faces.clone().map(move |f| (r, f))) {
+                rsm.faces.draw(ctx, &mut pass, face);
+                let view = (&rsm.faces.uniforms[face], (RSM_RESOLUTION, RSM_RESOLUTION));
+                resolve_view(ctx, &mut pass, view, &rsm.faces.vis[face], &rsm.records[face], None);
             }
         }
-        for face in faces.clone() {
-            let vis = &self.face_vis[face];
-            let bytes = vis.size();
-            rec.encoder().copy_buffer_to_buffer(vis, 0, &self.atlas, face as u64 * bytes, bytes);
-        }
-        if let Some(rsm) = self.rsm.as_ref().filter(|_| wants_rsm(ctx.plan)) {
-            for face in faces {
-                let encoder = rec.encoder();
-                for (from, to) in
-                    [(&rsm.face_vis[face], &rsm.vis), (&rsm.face_gbuffer[face], &rsm.gbuffer)]
-                {
-                    let bytes = from.size();
-                    encoder.copy_buffer_to_buffer(from, 0, to, face as u64 * bytes, bytes);
-                }
+        let encoder = rec.encoder();
+        for face in faces {
+            self.faces.copy(encoder, face);
+            if let Some(rsm) = rsm {
+                rsm.faces.copy(encoder, face);
+                let bytes = rsm.records[face].size();
+                let at = face as u64 * bytes;
+                encoder.copy_buffer_to_buffer(&rsm.records[face], 0, &rsm.atlas, at, bytes);
             }
         }
     }
