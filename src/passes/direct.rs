@@ -8,17 +8,6 @@ use crate::gpu::{self, slots::direct as slot};
 use crate::plan::{Effect, PassId, Plan};
 use crate::settings::Settings;
 
-/// The shadow inputs of the direct kernel.
-#[derive(Clone, Copy)]
-pub(crate) struct ShadowInputs<'a> {
-    /// `ShadowFace` per face.
-    pub faces: &'a wgpu::Buffer,
-    /// `(first face, face count)` per light.
-    pub light_faces: &'a wgpu::Buffer,
-    /// Every face's visibility words.
-    pub atlas: &'a wgpu::Buffer,
-}
-
 /// Direct radiance of both layers (`vec4<f32>` per pixel), its Lambertian part (what the
 /// radiosity passes on), the kernel's constants, and the list of the pixels that hold a layer-1
 /// surface.

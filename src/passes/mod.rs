@@ -114,6 +114,33 @@ pub(crate) fn textures_constant(scene: &SceneBuffers) -> (&'static str, f64) {
     ("TEXTURES", f64::from(u8::from(!scene.info().textureless)))
 }
 
+/// The shadow inputs of the direct kernel.
+#[derive(Clone, Copy)]
+pub(crate) struct ShadowInputs<'a> {
+    /// `ShadowFace` per face.
+    pub faces: &'a wgpu::Buffer,
+    /// `(first face, face count)` per light.
+    pub light_faces: &'a wgpu::Buffer,
+    /// Every face's visibility words.
+    pub atlas: &'a wgpu::Buffer,
+}
+
+/// What `wgsl/offscreen.wgsl` reads of the reflective shadow maps.
+#[derive(Clone, Copy)]
+pub(crate) struct RsmInputs<'a> {
+    /// `ShadowFace` per face (at [`RSM_RESOLUTION`](crate::frame::RSM_RESOLUTION), offsets in
+    /// texels).
+    pub faces: &'a wgpu::Buffer,
+    /// The light of each face.
+    pub face_lights: &'a wgpu::Buffer,
+    /// Every face's visibility words.
+    pub vis: &'a wgpu::Buffer,
+    /// Every face's G-buffer records.
+    pub gbuffer: &'a wgpu::Buffer,
+    /// How many faces.
+    pub count: u32,
+}
+
 /// What the frame's stages read: the frame's inputs, and the targets the stages before wrote.
 pub(crate) struct FrameContext<'a> {
     pub device: &'a wgpu::Device,
@@ -131,9 +158,9 @@ pub(crate) struct FrameContext<'a> {
     /// moving geometry, the positions `Predict` extrapolates).
     pub previous_positions: Option<&'a wgpu::Buffer>,
     /// The shadow maps, when the plan draws them.
-    pub shadows: Option<direct::ShadowInputs<'a>>,
+    pub shadows: Option<ShadowInputs<'a>>,
     /// The reflective shadow maps, when the plan adds the off-screen light.
-    pub rsm: Option<shadow::RsmInputs<'a>>,
+    pub rsm: Option<RsmInputs<'a>>,
     /// Direct radiance of each layer.
     pub direct: [&'a wgpu::Buffer; 2],
     /// Its Lambertian part, of each layer (written when the radiosity runs).

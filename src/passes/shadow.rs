@@ -13,11 +13,10 @@
 //! shadow map, what `wgsl/offscreen.wgsl` gathers the light of the surfaces no layer holds from.
 //! It is kept and redrawn with the shadow maps.
 
-use super::direct::ShadowInputs;
 use super::fill::Fill;
 use super::raster::{Draw, RasterMode};
 use super::resolve::resolve_view;
-use super::{FrameContext, Recorder, Stage};
+use super::{FrameContext, Recorder, RsmInputs, ShadowInputs, Stage};
 use crate::frame::{FrameUniform, LightFaces, RSM_RESOLUTION, ShadowFace, light_faces};
 use crate::gpu;
 use crate::plan::{PassId, Plan};
@@ -148,21 +147,6 @@ struct Rsm {
     records: Vec<wgpu::Buffer>,
     atlas: wgpu::Buffer,
     face_lights: wgpu::Buffer,
-}
-
-/// What `wgsl/offscreen.wgsl` reads of the reflective shadow maps.
-#[derive(Clone, Copy)]
-pub(crate) struct RsmInputs<'a> {
-    /// `ShadowFace` per face (at [`RSM_RESOLUTION`], offsets in texels).
-    pub faces: &'a wgpu::Buffer,
-    /// The light of each face.
-    pub face_lights: &'a wgpu::Buffer,
-    /// Every face's visibility words.
-    pub vis: &'a wgpu::Buffer,
-    /// Every face's G-buffer records.
-    pub gbuffer: &'a wgpu::Buffer,
-    /// How many faces.
-    pub count: u32,
 }
 
 impl Rsm {
