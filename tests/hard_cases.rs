@@ -258,6 +258,31 @@ fn offscreen_light_from_a_spot_and_a_sun() {
     assert!(with > without * 1.05, "the light outside the screen counts: {with} against {without}");
 }
 
+/// Twelve shadow-casting point lights: 4608 clusters, of which a pixel sums at most 32 a frame
+/// (the frames cover the rest); bounded and finite like the rest.
+#[test]
+fn offscreen_light_from_many_lights() {
+    use deep_gbuffer::scene::{Light, LightKind};
+    let (mut scene, camera) = cornell();
+    scene.lights = (0..12)
+        .map(|i| {
+            let a = i as f32 * 0.52;
+            Light {
+                name: format!("lamp{i}"),
+                kind: LightKind::Point {
+                    position: Vec3::new(0.7 * a.cos(), 0.3 + 0.12 * i as f32, 0.7 * a.sin()),
+                    range: None,
+                },
+                color: Vec3::ONE,
+                intensity: 0.5,
+                casts_shadows: true,
+            }
+        })
+        .collect();
+    let c = check(&scene, &camera, small(), 3, "twelve shadow-casting lights");
+    assert_eq!(c.renderer.offscreen_buffers().map(|o| o.face_count), Some(72));
+}
+
 #[test]
 fn one_triangle_and_an_edge_on_triangle() {
     let tri = [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];

@@ -23,8 +23,9 @@
 //   towards any one).
 // offscreen_add: at each layer-0 point X (normal n_X) with the gather's irradiance E and
 //   coverage c, over the clusters that hold a texel (offscreen_compact lists them in order) of
-//   which (x, y) mod 4 picks one in `stride`, about 32 (turned every frame, weighted by stride;
-//   the blur and the temporal filter join them),
+//   which (x, y) mod 4 picks one in `stride`, at most 32 (turned every frame, weighted by
+//   stride; the blur and the temporal filter join them; past 512 clusters a frame's 4x4 block
+//   covers 16 of the stride's residues, and the frames the rest),
 //     E_off = sum flux (n_X . w) (-n . w) / (d^2 + A / pi),  c_off = sum A (n_X . w) (-n . w) / (pi (d^2 + A / pi)),
 //   w the unit direction from X to the cluster and d its distance: each cluster a disc of area A
 //   (bounded as a disc is where d is small), its light arriving at the cosine-weighted solid
@@ -97,16 +98,24 @@ struct Cluster {
 @group(0) @binding(12) var<storage, read_write> lit: array<Cluster>;
 @group(0) @binding(13) var<storage, read_write> lit_count: array<u32>;
 
-// Clusters a pixel sums, about: one in `stride` of them (1, 2, 4, 8 or 16, as many as the
-// 4x4 turns of a block hold).
+// Clusters a pixel sums at most: one in `stride` of them, the smallest power of two that
+// keeps the count within this (many lights' clusters cost each pixel no more).
 const CLUSTERS_PER_PIXEL: u32 = 32u;
 
 fn stride_for(count: u32) -> u32 {
     var stride = 1u;
-    while stride < 16u && stride * CLUSTERS_PER_PIXEL < count {
+    while stride * CLUSTERS_PER_PIXEL < count {
         stride *= 2u;
     }
     return stride;
+}
+
+// Which of the `stride` residues pixel `pixel` sums this frame: the 16 pixels of a 4x4 block
+// take different ones, turned every frame (by one, or past 16 by the block's 16, so that the
+// frames cover every residue in turn).
+fn stride_phase(pixel: vec2<u32>, stride: u32, turn: u32) -> u32 {
+    let b = (pixel.x & 3u) + 4u * (pixel.y & 3u);
+    return (b + select(turn, 16u * turn, stride > 16u)) % stride;
 }
 
 fn rsm_sample(t: u32) -> GSample {
@@ -289,7 +298,7 @@ fn offscreen_add(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = s.normal;
     let count = lit_count[0];
     let stride = stride_for(count);
-    let phase = ((gid.x & 3u) + 4u * (gid.y & 3u) + params.turn) % stride;
+    let phase = stride_phase(gid.xy, stride, params.turn);
     var e = vec3<f32>(0.0);
     var covered = 0.0;
     for (var k = phase; k < count; k += stride) {

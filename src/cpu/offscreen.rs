@@ -156,13 +156,21 @@ impl Rsm<'_> {
     }
 }
 
-/// As `stride_for`: a pixel sums one in this many of `count` clusters.
+/// As `stride_for`: a pixel sums one in this many of `count` clusters, at most 32 of them.
 pub fn stride_for(count: usize) -> usize {
     let mut stride = 1;
-    while stride < 16 && stride * 32 < count {
+    while stride * 32 < count {
         stride *= 2;
     }
     stride
+}
+
+/// As `stride_phase`: the residue pixel `(x, y)` sums at frame `turn`.
+pub fn stride_phase((x, y): (u32, u32), stride: usize, turn: u32) -> usize {
+    // u32 arithmetic that wraps, as the kernel's.
+    let b = (x & 3) + 4 * (y & 3);
+    let turned = if stride > 16 { turn.wrapping_mul(16) } else { turn };
+    (b.wrapping_add(turned) % stride as u32) as usize
 }
 
 /// As `offscreen_compact` and `offscreen_add`: the gather's irradiance and coverage `raw` with
@@ -187,7 +195,7 @@ pub fn add(
             }
             let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
             let at = mat_mul(&f.inv_view, c.extend(1.0).to_array()).xyz();
-            let phase = ((x & 3) + 4 * (y & 3) + u.turn) as usize % stride;
+            let phase = stride_phase((x, y), stride, u.turn);
             let (mut e, mut covered) = (Vec3::ZERO, 0.0f32);
             for cluster in lit.iter().skip(phase).step_by(stride) {
                 let d = Vec3::from(cluster.position) - at;
@@ -215,4 +223,35 @@ pub fn add(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{stride_for, stride_phase};
+
+    /// A pixel sums at most 32 clusters however many there are, the 16 pixels of a 4x4 block
+    /// take different residues, and over the frames the block takes every one.
+    #[test]
+    fn strides_bound_the_work_and_cover_every_cluster() {
+        for count in [0, 1, 31, 32, 33, 384, 512, 513, 15360, 1 << 20] {
+            let stride = stride_for(count);
+            assert!(count.div_ceil(stride) <= 32, "{count} clusters: stride {stride}");
+            assert!(stride == 1 || count.div_ceil(stride / 2) > 32, "{count}: the least stride");
+            for turn in [0, 1, 7, u32::MAX] {
+                let mut seen: Vec<usize> =
+                    (0..16).map(|b| stride_phase((b % 4, b / 4), stride, turn)).collect();
+                seen.sort_unstable();
+                seen.dedup();
+                assert_eq!(seen.len(), stride.min(16), "{count} clusters, turn {turn}");
+            }
+            // The block's pixels over stride / 16 frames (one frame up to 16) take every one.
+            let frames = (stride / 16).max(1) as u32;
+            let mut over_frames: Vec<usize> = (0..frames)
+                .flat_map(|turn| (0..16).map(move |b| stride_phase((b % 4, b / 4), stride, turn)))
+                .collect();
+            over_frames.sort_unstable();
+            over_frames.dedup();
+            assert_eq!(over_frames.len(), stride, "{count} clusters over {frames} frames");
+        }
+    }
 }
