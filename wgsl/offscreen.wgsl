@@ -14,11 +14,12 @@
 //   the visibility word's depth), normal n (towards the light), perpendicular area A_perp
 //   (the texel's solid angle times the squared distance for a point or spot light, its square
 //   for a directional one) and area A = A_perp / max(n.l, 0.1). It reflects
-//   L = (1 - metallic) rho occlusion / pi E (n.l), E the light's irradiance there (light_at),
-//   so that L A = (1 - metallic) rho occlusion / pi E A_perp min(n.l / 0.1, 1) whatever its slope.
-//   A texel whose point one of this frame's layers holds (it projects onto a pixel whose layer-0
-//   or layer-1 depth lies within `held_tolerance` of its own) is left out: the gather already
-//   counts it. The rest sum into one cluster: sum L A (flux), sum A (area), their area-weighted
+//   L = (1 - metallic) rho occlusion / pi E (n.l) + Le, E the light's irradiance there
+//   (light_at), so that L A = (1 - metallic) rho occlusion / pi E A_perp min(n.l / 0.1, 1) + Le A
+//   whatever its slope. A texel whose point one of this frame's layers holds (it projects onto a
+//   pixel whose layer-0 or layer-1 depth lies within `held_tolerance` of its own) is left out:
+//   the gather already counts it; within HELD_MARGIN of the screen's edge it counts in part
+//   (`unheld`). The rest sum into one cluster: sum L A (flux), sum A (area), their area-weighted
 //   mean point and normal (not renormalized: a cluster of patches facing many ways sends less
 //   towards any one).
 // offscreen_add: at each layer-0 point X (normal n_X) with the gather's irradiance E and
@@ -46,7 +47,7 @@
 #include "shared/spiral.wgsl"
 #include "shared/vis.wgsl"
 
-// Mirrors `OffscreenUniform` in src/frame/uniforms.rs.
+// Mirrors `OffscreenUniform` in src/frame/shadow.rs.
 struct Offscreen {
     // Faces of every shadow-casting light, RSM_RESOLUTION texels a side each.
     faces: u32,
@@ -57,15 +58,16 @@ struct Offscreen {
     _pad: u32,
 }
 
-// Texels a face side, and a cluster's side in texels (a workgroup).
+// Texels a face side (`RSM_RESOLUTION` in src/frame/shadow.rs, which sets it), a cluster's
+// side in texels (a workgroup), and the clusters of a face.
+override RSM_RESOLUTION: u32 = 64u;
+const CLUSTER_SIDE: u32 = 8u;
+override CLUSTERS_PER_FACE: u32 = (RSM_RESOLUTION / CLUSTER_SIDE) * (RSM_RESOLUTION / CLUSTER_SIDE);
 // The strip along the screen's edge where a held point still counts in part, as a share of
 // the screen's height (README, "Off-screen light").
 const HELD_MARGIN: f32 = 0.1;
-const RSM_RESOLUTION: u32 = 64u;
-const CLUSTER_SIDE: u32 = 8u;
-const CLUSTERS_PER_FACE: u32 = 64u;
 
-// Mirrors `Cluster` in src/frame/uniforms.rs.
+// Mirrors `Cluster` in src/frame/shadow.rs.
 struct Cluster {
     // Area-weighted mean world point, and the area (0: an empty cluster).
     position: vec3<f32>,

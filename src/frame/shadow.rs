@@ -142,10 +142,11 @@ pub fn light_faces(
     out
 }
 
-/// Texels a side of a light's reflective shadow map faces (`wgsl/offscreen.wgsl`).
+/// Texels a side of a light's reflective shadow map faces (`wgsl/offscreen.wgsl` takes it as
+/// a pipeline constant).
 pub const RSM_RESOLUTION: u32 = 64;
 /// Clusters per reflective shadow map face: 8x8 texels each.
-pub const RSM_CLUSTERS_PER_FACE: u32 = 64;
+pub const RSM_CLUSTERS_PER_FACE: u32 = (RSM_RESOLUTION / 8) * (RSM_RESOLUTION / 8);
 
 /// Mirrors `struct Offscreen` in `wgsl/offscreen.wgsl`.
 #[repr(C)]

@@ -352,8 +352,9 @@ impl Stage for RadiosityStage {
                     (off::LIT_COUNT, &o.lit_count),
                 ];
                 let defines = ctx.settings.precision.defines();
+                let constants = [("RSM_RESOLUTION", f64::from(RSM_RESOLUTION))];
                 let kernel =
-                    |entry| ctx.pipelines.get(ctx.device, "offscreen", entry, &defines, &[]);
+                    |entry| ctx.pipelines.get(ctx.device, "offscreen", entry, &defines, &constants);
                 let cells = RSM_RESOLUTION / 8;
                 kernel("offscreen_clusters").dispatch(
                     ctx.device,
