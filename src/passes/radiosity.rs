@@ -163,7 +163,10 @@ impl RadiosityStage {
         let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         if plan.contains(&PassId::RadiosityOffscreen) {
-            let clusters = u64::from(offscreen.max(1) * RSM_CLUSTERS_PER_FACE);
+            let bytes = u64::from(offscreen.max(1) * RSM_CLUSTERS_PER_FACE)
+                * std::mem::size_of::<Cluster>() as u64;
+            let storage =
+                |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
             let o = match self.offscreen.take() {
                 Some(o) if o.faces == offscreen => o,
                 _ => Offscreen {
@@ -171,24 +174,9 @@ impl RadiosityStage {
                         device,
                         "deep-gbuffer.offscreen",
                     ),
-                    clusters: gpu::storage_buffer(
-                        device,
-                        "deep-gbuffer.offscreen.clusters",
-                        clusters * std::mem::size_of::<Cluster>() as u64,
-                        wgpu::BufferUsages::empty(),
-                    ),
-                    lit: gpu::storage_buffer(
-                        device,
-                        "deep-gbuffer.offscreen.lit",
-                        clusters * std::mem::size_of::<Cluster>() as u64,
-                        wgpu::BufferUsages::empty(),
-                    ),
-                    lit_count: gpu::storage_buffer(
-                        device,
-                        "deep-gbuffer.offscreen.count",
-                        16,
-                        wgpu::BufferUsages::empty(),
-                    ),
+                    clusters: storage("deep-gbuffer.offscreen.clusters", bytes),
+                    lit: storage("deep-gbuffer.offscreen.lit", bytes),
+                    lit_count: storage("deep-gbuffer.offscreen.count", 16),
                     faces: offscreen,
                 },
             };
@@ -196,6 +184,11 @@ impl RadiosityStage {
             queue.write_buffer(&o.uniform, 0, bytemuck::bytes_of(&uniform));
             self.offscreen = Some(o);
         }
+    }
+
+    /// The off-screen light's clusters (a [`Cluster`] each), once a frame has added it.
+    pub(crate) fn clusters(&self) -> Option<&wgpu::Buffer> {
+        self.offscreen.as_ref().map(|o| &o.clusters)
     }
 
     /// This frame's buffers (the last frame's, between frames).
@@ -212,16 +205,9 @@ impl RadiosityStage {
     }
 }
 
-impl RadiosityStage {
-    /// The off-screen light's clusters (a [`Cluster`] each), once a frame has added it.
-    pub(crate) fn clusters(&self) -> Option<&wgpu::Buffer> {
-        self.offscreen.as_ref().map(|o| &o.clusters)
-    }
-}
-
-/// The off-screen light's buffers, as [`Renderer::offscreen_buffers`](crate::Renderer) names
-/// them: the lights' reflective shadow maps and the clusters of their texels that no layer
-/// holds.
+/// The off-screen light's buffers, as
+/// [`Renderer::offscreen_buffers`](crate::Renderer::offscreen_buffers) names them: the lights'
+/// reflective shadow maps and the clusters of their texels that no layer holds.
 #[derive(Clone, Copy, Debug)]
 pub struct OffscreenBuffers<'a> {
     /// A [`ShadowFace`](crate::frame::ShadowFace) per face, at
