@@ -19,8 +19,9 @@ use crate::passes::composite::CompositeStage;
 use crate::passes::direct::DirectStage;
 use crate::passes::dof::DofStage;
 use crate::passes::motion_blur::MotionBlurStage;
+use crate::passes::offscreen::OffscreenBuffers;
 use crate::passes::present::Present;
-use crate::passes::radiosity::{OffscreenBuffers, RadiosityBuffers, RadiosityStage};
+use crate::passes::radiosity::{RadiosityBuffers, RadiosityStage};
 use crate::passes::raster::RasterStage;
 use crate::passes::reflections::ReflectionsStage;
 use crate::passes::resolve::ResolveStage;
@@ -234,11 +235,7 @@ impl Stages {
                 .as_ref()
                 .filter(|_| runs(Effect::Shadows))
                 .map(ShadowStage::inputs),
-            rsm: self
-                .shadows
-                .as_ref()
-                .filter(|_| plan.contains(&PassId::RadiosityOffscreen))
-                .and_then(ShadowStage::rsm_inputs),
+            rsm: self.shadows.as_ref().and_then(|s| s.rsm_inputs(plan)),
             direct: [self.direct.radiance(0), self.direct.radiance(1)],
             diffuse: [self.direct.diffuse(0), self.direct.diffuse(1)],
             lighting: &self.direct,
@@ -738,12 +735,8 @@ impl Renderer {
             let history = self.history.is_some() && st.radiosity.is_some();
             let radiosity = st.radiosity.get_or_insert_with(|| RadiosityStage::new(device, s));
             // The reflective shadow maps' faces the off-screen light sums (none without it).
-            let offscreen = st
-                .shadows
-                .as_ref()
-                .filter(|_| plan.contains(&PassId::RadiosityOffscreen))
-                .and_then(ShadowStage::rsm_inputs)
-                .map_or(0, |r| r.count);
+            let offscreen =
+                st.shadows.as_ref().and_then(|s| s.rsm_inputs(plan)).map_or(0, |r| r.count);
             radiosity.prepare(device, queue, s, history, plan, offscreen);
         }
         if plan.runs(Effect::Reflections) {
@@ -1090,8 +1083,7 @@ impl Renderer {
     /// The off-screen light's buffers of the last frame, or `None` when it did not run
     /// ([`RadiositySettings::offscreen`](crate::RadiositySettings::offscreen)).
     pub fn offscreen_buffers(&self) -> Option<OffscreenBuffers<'_>> {
-        let ran = self.plan.as_ref().is_some_and(|p| p.contains(&PassId::RadiosityOffscreen));
-        let rsm = self.stages.shadows.as_ref().filter(|_| ran)?.rsm_inputs()?;
+        let rsm = self.stages.shadows.as_ref()?.rsm_inputs(self.plan.as_ref()?)?;
         let clusters = self.stages.radiosity.as_ref()?.clusters()?;
         Some(OffscreenBuffers {
             faces: rsm.faces,

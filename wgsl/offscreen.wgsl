@@ -58,14 +58,15 @@ struct Offscreen {
     _pad: u32,
 }
 
-// Texels a face side (`RSM_RESOLUTION` in src/frame/shadow.rs, which sets it), a cluster's
-// side in texels (a workgroup), and the clusters of a face.
+// Texels a face side, the clusters a pixel sums at most, and the strip along the screen's edge
+// where a held point still counts in part (a share of the screen's height): set from
+// src/frame/shadow.rs's RSM_* constants. A cluster's side in texels is the cluster kernel's
+// workgroup (RSM_CLUSTER_SIDE there names it).
 override RSM_RESOLUTION: u32 = 64u;
 const CLUSTER_SIDE: u32 = 8u;
 override CLUSTERS_PER_FACE: u32 = (RSM_RESOLUTION / CLUSTER_SIDE) * (RSM_RESOLUTION / CLUSTER_SIDE);
-// The strip along the screen's edge where a held point still counts in part, as a share of
-// the screen's height (README, "Off-screen light").
-const HELD_MARGIN: f32 = 0.1;
+override CLUSTERS_PER_PIXEL: u32 = 32u;
+override HELD_MARGIN: f32 = 0.1;
 
 // Mirrors `Cluster` in src/frame/shadow.rs.
 struct Cluster {
@@ -100,10 +101,8 @@ struct Cluster {
 @group(0) @binding(12) var<storage, read_write> lit: array<Cluster>;
 @group(0) @binding(13) var<storage, read_write> lit_count: array<u32>;
 
-// Clusters a pixel sums at most: one in `stride` of them, the smallest power of two that
-// keeps the count within this (many lights' clusters cost each pixel no more).
-const CLUSTERS_PER_PIXEL: u32 = 32u;
-
+// A pixel sums one in `stride` of `count` clusters: the smallest power of two that keeps them
+// within CLUSTERS_PER_PIXEL (many lights' clusters cost each pixel no more).
 fn stride_for(count: u32) -> u32 {
     var stride = 1u;
     while stride * CLUSTERS_PER_PIXEL < count {
@@ -241,7 +240,7 @@ fn offscreen_clusters(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
     }
     if li == 0u && face < params.faces {
         let sum = shared_flux[0];
-        var c = Cluster(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
+        var c = Cluster();
         if sum.a > 0.0 && sum.a <= 3.0e38 {
             c = Cluster(shared_point[0].xyz / sum.a, sum.a, shared_normal[0].xyz / sum.a, 0.0, sum.rgb, 0.0);
         }
@@ -258,7 +257,7 @@ fn offscreen_compact(@builtin(local_invocation_index) li: u32) {
     var base = 0u;
     for (var start = 0u; start < count; start += 64u) {
         let k = start + li;
-        var c = Cluster(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0);
+        var c = Cluster();
         var flag = 0u;
         if k < count {
             c = clusters[k];

@@ -9,15 +9,11 @@ use crate::cpu::direct::light_at;
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::spiral::pixels_per_unit;
 use crate::frame::{
-    Cluster, FrameUniform, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, ShadowFace,
+    Cluster, FrameUniform, OffscreenUniform, RSM_CLUSTER_SIDE, RSM_CLUSTERS_PER_FACE,
+    RSM_CLUSTERS_PER_PIXEL, RSM_HELD_MARGIN, RSM_RESOLUTION, ShadowFace,
 };
-use crate::gbuffer::GSample;
+use crate::gbuffer::{GSample, vis_depth};
 use crate::scene::GpuLight;
-
-/// `HELD_MARGIN` of the kernel.
-const HELD_MARGIN: f32 = 0.1;
-/// The empty visibility word's depth half.
-const VIS_EMPTY: u32 = u32::MAX;
 
 /// What the cluster kernel reads: the camera's frame and constants, the lights, and the
 /// reflective shadow maps.
@@ -32,12 +28,12 @@ pub struct Rsm<'a> {
     pub faces: &'a [ShadowFace],
     /// The light of each face.
     pub face_lights: &'a [u32],
-    /// The faces' visibility words (two `u32` a texel: id, depth).
-    pub vis: &'a [u32],
+    /// The faces' visibility words.
+    pub vis: &'a [u64],
     /// The faces' G-buffer records, decoded.
     pub records: &'a [GSample],
     /// This frame's visibility words of layer 0 and layer 1.
-    pub layers: [&'a [u32]; 2],
+    pub layers: [&'a [u64]; 2],
 }
 
 impl Rsm<'_> {
@@ -66,28 +62,24 @@ impl Rsm<'_> {
         let q = (px.y as u32 * f.width + px.x as u32) as usize;
         let n_view = mat_mul(&f.view, n.extend(0.0).to_array()).xyz();
         let tolerance = self.held_tolerance(v.xyz(), n_view, z);
-        let near = |layer: &[u32]| {
-            let bits = layer[2 * q + 1];
-            bits != VIS_EMPTY && (f32::from_bits(bits) - z).abs() <= tolerance
-        };
+        let near = |layer: &[u64]| vis_depth(layer[q]).is_some_and(|d| (d - z).abs() <= tolerance);
         let held = near(self.layers[0]) || (self.params.layers == 2 && near(self.layers[1]));
         if !held {
             return 1.0;
         }
         let edge = px.x.min(size.x - px.x).min(px.y.min(size.y - px.y));
-        (1.0 - edge / (HELD_MARGIN * size.y).max(1e-6)).clamp(0.0, 1.0)
+        (1.0 - edge / (RSM_HELD_MARGIN * size.y).max(1e-6)).clamp(0.0, 1.0)
     }
 
     /// One texel's share of its cluster: flux, area, area times point, area times normal.
     fn texel(&self, face: usize, (x, y): (u32, u32)) -> Option<(Vec3, f32, Vec3, Vec3)> {
         let f = &self.faces[face];
         let t = (f.offset + y * RSM_RESOLUTION + x) as usize;
-        let depth_bits = self.vis[2 * t + 1];
         let s = &self.records[t];
-        if depth_bits == VIS_EMPTY || s.depth.is_nan() || s.depth <= 0.0 {
+        let depth = vis_depth(self.vis[t])?;
+        if s.depth.is_nan() || s.depth <= 0.0 {
             return None;
         }
-        let depth = f32::from_bits(depth_bits);
         let res = RSM_RESOLUTION as f32;
         let ndc = Vec2::new((x as f32 + 0.5) / res * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / res * 2.0);
         let (v, perpendicular) = if f.ortho != 0 {
@@ -122,17 +114,17 @@ impl Rsm<'_> {
 
     /// As `offscreen_clusters`: every face's clusters, [`RSM_CLUSTERS_PER_FACE`] each.
     pub fn clusters(&self) -> Vec<Cluster> {
-        let cells = RSM_RESOLUTION / 8;
+        let (side, cells) = (RSM_CLUSTER_SIDE, RSM_RESOLUTION / RSM_CLUSTER_SIDE);
         let mut out = Vec::new();
         for face in 0..self.params.faces as usize {
             for cy in 0..cells {
                 for cx in 0..cells {
                     let (mut flux, mut area, mut point, mut normal) =
                         (Vec3::ZERO, 0.0f32, Vec3::ZERO, Vec3::ZERO);
-                    for ly in 0..8 {
-                        for lx in 0..8 {
-                            if let Some((f, a, p, n)) = self.texel(face, (cx * 8 + lx, cy * 8 + ly))
-                            {
+                    for ly in 0..side {
+                        for lx in 0..side {
+                            let texel = (cx * side + lx, cy * side + ly);
+                            if let Some((f, a, p, n)) = self.texel(face, texel) {
                                 flux += f;
                                 area += a;
                                 point += p;
@@ -156,10 +148,11 @@ impl Rsm<'_> {
     }
 }
 
-/// As `stride_for`: a pixel sums one in this many of `count` clusters, at most 32 of them.
+/// As `stride_for`: a pixel sums one in this many of `count` clusters, at most
+/// [`RSM_CLUSTERS_PER_PIXEL`] of them.
 pub fn stride_for(count: usize) -> usize {
     let mut stride = 1;
-    while stride * 32 < count {
+    while stride * (RSM_CLUSTERS_PER_PIXEL as usize) < count {
         stride *= 2;
     }
     stride
@@ -227,7 +220,7 @@ pub fn add(
 
 #[cfg(test)]
 mod tests {
-    use super::{stride_for, stride_phase};
+    use super::{RSM_CLUSTERS_PER_PIXEL, stride_for, stride_phase};
 
     /// A pixel sums at most 32 clusters however many there are, the 16 pixels of a 4x4 block
     /// take different residues, and over the frames the block takes every one.
@@ -235,8 +228,9 @@ mod tests {
     fn strides_bound_the_work_and_cover_every_cluster() {
         for count in [0, 1, 31, 32, 33, 384, 512, 513, 15360, 1 << 20] {
             let stride = stride_for(count);
-            assert!(count.div_ceil(stride) <= 32, "{count} clusters: stride {stride}");
-            assert!(stride == 1 || count.div_ceil(stride / 2) > 32, "{count}: the least stride");
+            let most = RSM_CLUSTERS_PER_PIXEL as usize;
+            assert!(count.div_ceil(stride) <= most, "{count} clusters: stride {stride}");
+            assert!(stride == 1 || count.div_ceil(stride / 2) > most, "{count}: the least stride");
             for turn in [0, 1, 7, u32::MAX] {
                 let mut seen: Vec<usize> =
                     (0..16).map(|b| stride_phase((b % 4, b / 4), stride, turn)).collect();

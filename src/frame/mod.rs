@@ -18,8 +18,9 @@ mod uniforms;
 
 pub use pyramid::{Level, MAX_LEVELS, PyramidLayout, mip_size};
 pub use shadow::{
-    Cluster, LightFaces, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, ShadowFace, face,
-    face_cameras, light_faces,
+    Cluster, LightFaces, OffscreenUniform, RSM_CLUSTER_SIDE, RSM_CLUSTERS_PER_FACE,
+    RSM_CLUSTERS_PER_PIXEL, RSM_HELD_MARGIN, RSM_RESOLUTION, ShadowFace, face, face_cameras,
+    light_faces,
 };
 pub use source::{RGB9E5_MAX, SourceTexel, pack_normal, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{

@@ -142,11 +142,22 @@ pub fn light_faces(
     out
 }
 
-/// Texels a side of a light's reflective shadow map faces (`wgsl/offscreen.wgsl` takes it as
-/// a pipeline constant).
+// The off-screen light's constants (`wgsl/offscreen.wgsl` takes them as pipeline constants;
+// `cpu::offscreen` reads them here).
+
+/// Texels a side of a light's reflective shadow map faces.
 pub const RSM_RESOLUTION: u32 = 64;
-/// Clusters per reflective shadow map face: 8x8 texels each.
-pub const RSM_CLUSTERS_PER_FACE: u32 = (RSM_RESOLUTION / 8) * (RSM_RESOLUTION / 8);
+/// Texels a side of a cluster: the cluster kernel's workgroup (`CLUSTER_SIDE`, 8x8, which this
+/// names; the kernel's reduction is written for it).
+pub const RSM_CLUSTER_SIDE: u32 = 8;
+/// Clusters per reflective shadow map face.
+pub const RSM_CLUSTERS_PER_FACE: u32 =
+    (RSM_RESOLUTION / RSM_CLUSTER_SIDE) * (RSM_RESOLUTION / RSM_CLUSTER_SIDE);
+/// The most clusters a pixel sums a frame.
+pub const RSM_CLUSTERS_PER_PIXEL: u32 = 32;
+/// The strip along the screen's edge, as a share of its height, where a point a layer holds
+/// still counts in part in the clusters (the gather's steps rarely land there).
+pub const RSM_HELD_MARGIN: f32 = 0.1;
 
 /// Mirrors `struct Offscreen` in `wgsl/offscreen.wgsl`.
 #[repr(C)]

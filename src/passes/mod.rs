@@ -16,6 +16,7 @@ pub(crate) mod direct;
 pub(crate) mod dof;
 pub(crate) mod fill;
 pub(crate) mod motion_blur;
+pub(crate) mod offscreen;
 pub(crate) mod present;
 pub(crate) mod pyramid;
 pub(crate) mod radiosity;
@@ -31,8 +32,6 @@ use crate::gpu::{PassTraffic, Pipelines, Timestamps, traffic};
 use crate::plan::{PassId, Plan};
 use crate::settings::Settings;
 
-/// Records a frame's passes into the caller's encoder, each in a compute pass of its own, named
-/// by its [`PassId`], timed when timestamps are on, and with the bytes it binds counted
 /// A list of the items (pixels, texels) a kernel runs at, built on the GPU each frame, and the
 /// indirect dispatch over it (`wgsl/shared/list.wgsl`: 64 items a workgroup).
 pub(crate) struct PointList {
@@ -59,6 +58,8 @@ impl PointList {
     }
 }
 
+/// Records a frame's passes into the caller's encoder, each in a compute pass of its own, named
+/// by its [`PassId`], timed when timestamps are on, and with the bytes it binds counted
 /// ([`traffic`]).
 pub(crate) struct Recorder<'a> {
     encoder: &'a mut wgpu::CommandEncoder,

@@ -1,14 +1,12 @@
 //! `wgsl/radiosity.wgsl`: screen-space radiosity with temporal multi-bounce.
 
 use super::blur::Blur;
+use super::offscreen::Offscreen;
 use super::pyramid::Pyramid;
 use super::upsample::Upsample;
 use super::{FrameContext, PointList, Recorder, Stage};
-use crate::frame::{
-    Cluster, OffscreenUniform, RSM_CLUSTERS_PER_FACE, RSM_RESOLUTION, RadiosityUniform,
-    SourceTexel, mip_size,
-};
-use crate::gpu::{self, slots::offscreen as off, slots::radiosity as slot};
+use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
+use crate::gpu::{self, slots::radiosity as slot};
 use crate::plan::{PassId, Plan};
 use crate::settings::{RadiosityEstimator, Settings, downsample_level};
 
@@ -78,17 +76,6 @@ pub(crate) struct RadiosityStage {
     layer1_bounce: bool,
     /// The off-screen light's constants and clusters (made by the first frame that adds it).
     offscreen: Option<Offscreen>,
-}
-
-/// The off-screen light's constants and the clusters of the reflective shadow maps' texels
-/// that no layer holds.
-struct Offscreen {
-    uniform: wgpu::Buffer,
-    clusters: wgpu::Buffer,
-    /// The clusters that hold a texel, in order, and their count.
-    lit: wgpu::Buffer,
-    lit_count: wgpu::Buffer,
-    faces: u32,
 }
 
 impl RadiosityStage {
@@ -163,32 +150,15 @@ impl RadiosityStage {
         let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         if plan.contains(&PassId::RadiosityOffscreen) {
-            let bytes = u64::from(offscreen.max(1) * RSM_CLUSTERS_PER_FACE)
-                * std::mem::size_of::<Cluster>() as u64;
-            let storage =
-                |label, size| gpu::storage_buffer(device, label, size, wgpu::BufferUsages::empty());
-            let o = match self.offscreen.take() {
-                Some(o) if o.faces == offscreen => o,
-                _ => Offscreen {
-                    uniform: gpu::uniform_buffer_for::<OffscreenUniform>(
-                        device,
-                        "deep-gbuffer.offscreen",
-                    ),
-                    clusters: storage("deep-gbuffer.offscreen.clusters", bytes),
-                    lit: storage("deep-gbuffer.offscreen.lit", bytes),
-                    lit_count: storage("deep-gbuffer.offscreen.count", 16),
-                    faces: offscreen,
-                },
-            };
-            let uniform = OffscreenUniform::new(offscreen, self.turn, plan.layers);
-            queue.write_buffer(&o.uniform, 0, bytemuck::bytes_of(&uniform));
+            let o = Offscreen::for_faces(self.offscreen.take(), device, offscreen);
+            o.prepare(queue, self.turn, plan.layers);
             self.offscreen = Some(o);
         }
     }
 
-    /// The off-screen light's clusters (a [`Cluster`] each), once a frame has added it.
+    /// The off-screen light's clusters, once a frame has added it.
     pub(crate) fn clusters(&self) -> Option<&wgpu::Buffer> {
-        self.offscreen.as_ref().map(|o| &o.clusters)
+        self.offscreen.as_ref().map(Offscreen::clusters)
     }
 
     /// This frame's buffers (the last frame's, between frames).
@@ -203,27 +173,6 @@ impl RadiosityStage {
             layer1: self.layer1.as_ref().map(|l| &l.records).filter(|_| self.layer1_written),
         }
     }
-}
-
-/// The off-screen light's buffers, as
-/// [`Renderer::offscreen_buffers`](crate::Renderer::offscreen_buffers) names them: the lights'
-/// reflective shadow maps and the clusters of their texels that no layer holds.
-#[derive(Clone, Copy, Debug)]
-pub struct OffscreenBuffers<'a> {
-    /// A [`ShadowFace`](crate::frame::ShadowFace) per face, at
-    /// [`RSM_RESOLUTION`] texels a side (offsets in texels).
-    pub faces: &'a wgpu::Buffer,
-    /// The light of each face (`u32`).
-    pub face_lights: &'a wgpu::Buffer,
-    /// The faces' visibility words, back to back (two `u32` a texel: id, depth).
-    pub vis: &'a wgpu::Buffer,
-    /// The faces' G-buffer records, back to back: a G-buffer layer [`RSM_RESOLUTION`] wide and
-    /// `RSM_RESOLUTION * face_count` high.
-    pub records: &'a wgpu::Buffer,
-    /// How many faces.
-    pub face_count: u32,
-    /// [`RSM_CLUSTERS_PER_FACE`] [`Cluster`]s per face.
-    pub clusters: &'a wgpu::Buffer,
 }
 
 impl Stage for RadiosityStage {
@@ -317,44 +266,9 @@ impl Stage for RadiosityStage {
                     .dispatch_indirect(ctx.device, &mut pass, &entries, args, 0);
             }
             PassId::RadiosityOffscreen => {
-                let (Some(o), Some(rsm)) = (&self.offscreen, &ctx.rsm) else {
-                    unreachable!("the off-screen light runs with the reflective shadow maps")
-                };
-                let vis1 = if ctx.plan.layers == 2 { ctx.raster.vis1() } else { ctx.raster.vis0() };
-                let entries = [
-                    (off::FRAME, ctx.frame),
-                    (off::PARAMS, &o.uniform),
-                    (off::LIGHTS, ctx.scene.light_buffer()),
-                    (off::FACES, rsm.faces),
-                    (off::FACE_LIGHTS, rsm.face_lights),
-                    (off::RSM_VIS, rsm.vis),
-                    (off::RSM, rsm.gbuffer),
-                    (off::VIS0, ctx.raster.vis0()),
-                    (off::VIS1, vis1),
-                    (off::CLUSTERS, &o.clusters),
-                    (off::GBUFFER, ctx.gbuffer[0]),
-                    (off::RAW, &self.gathered),
-                    (off::LIT, &o.lit),
-                    (off::LIT_COUNT, &o.lit_count),
-                ];
-                let defines = ctx.settings.precision.defines();
-                let constants = [("RSM_RESOLUTION", f64::from(RSM_RESOLUTION))];
-                let kernel =
-                    |entry| ctx.pipelines.get(ctx.device, "offscreen", entry, &defines, &constants);
-                let cells = RSM_RESOLUTION / 8;
-                kernel("offscreen_clusters").dispatch(
-                    ctx.device,
-                    &mut pass,
-                    &entries,
-                    (o.faces * cells, cells),
-                );
-                kernel("offscreen_compact").dispatch(ctx.device, &mut pass, &entries, (1, 1));
-                kernel("offscreen_add").dispatch_pixels(
-                    ctx.device,
-                    &mut pass,
-                    &entries,
-                    ctx.size(),
-                );
+                let offscreen =
+                    self.offscreen.as_ref().expect("prepared with the off-screen light");
+                offscreen.record(ctx, &mut pass, &self.gathered);
             }
             PassId::RadiosityTemporal => {
                 dispatch(&mut pass, "radiosity_temporal", &entries, &[], ctx.size());

@@ -262,9 +262,9 @@ impl ShadowStage {
         }
     }
 
-    /// What the off-screen light reads, when the stage has reflective shadow maps.
-    pub(crate) fn rsm_inputs(&self) -> Option<RsmInputs<'_>> {
-        self.rsm.as_ref().map(|r| RsmInputs {
+    /// What the off-screen light reads, where `plan` adds it.
+    pub(crate) fn rsm_inputs(&self, plan: &Plan) -> Option<RsmInputs<'_>> {
+        self.rsm.as_ref().filter(|_| wants_rsm(plan)).map(|r| RsmInputs {
             faces: &r.faces.lookup,
             face_lights: &r.face_lights,
             vis: &r.faces.atlas,
