@@ -204,6 +204,15 @@ impl PassId {
     pub fn is_gbuffer(&self) -> bool {
         matches!(self.stage(), StageId::Raster | StageId::Resolve)
     }
+
+    /// Whether the pass writes the same result on a still frame as on the frame before: it
+    /// reads nothing that changes from frame to frame but the camera, the scene and the shadow
+    /// maps (the G-buffer, the depth pyramid, the obscurance, the direct light; not the
+    /// radiosity, which gathers anew every frame). A still frame keeps these passes' results
+    /// ([`Plan::reused`]).
+    pub fn same_when_still(&self) -> bool {
+        self.is_gbuffer() || matches!(self.effect(), Some(Effect::Ao | Effect::Direct))
+    }
 }
 
 impl fmt::Display for PassId {
@@ -288,10 +297,19 @@ pub struct Plan {
     pub passes: Vec<PassId>,
     /// The effects that do not run, and why.
     pub left_out: Vec<(Effect, Reason)>,
-    /// Shadow passes this frame does not record because an earlier frame drew their maps and
-    /// nothing they depend on changed since (the light, the scene's buffers, the shadow
-    /// settings; see [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)). The
-    /// maps are still read: shadows run.
+    /// Passes this frame does not record because an earlier frame wrote what they would write,
+    /// and it is still in place: their results are read as if they had run, and their effects
+    /// run.
+    /// - Shadow passes whose maps an earlier frame drew, when nothing they depend on changed
+    ///   since (the light, the scene's buffers, the shadow settings; see
+    ///   [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)).
+    /// - On a still frame, the passes [`PassId::same_when_still`] names (the G-buffer, the depth
+    ///   pyramid, the obscurance and the direct light): a frame is still when its frame
+    ///   constants (the camera, the last frame's camera, the image) are the last frame's, the
+    ///   scene and its buffers and the passes are the same, no shadow map or transparency peel
+    ///   is drawn, and the renderer drew the last frame's G-buffer itself. So a view that stops
+    ///   moving keeps them from its second still frame on (the first still frame's G-buffer is
+    ///   the first with no motion), while the radiosity goes on gathering its next bounces.
     pub reused: Vec<PassId>,
 }
 
@@ -575,6 +593,15 @@ impl fmt::Display for Plan {
             writeln!(f, "shadows: none")?;
         } else {
             writeln!(f, "shadows: {}", shadows.join(", "))?;
+        }
+        let still: Vec<String> = self
+            .reused
+            .iter()
+            .filter(|p| p.same_when_still())
+            .map(|p| p.name().into_owned())
+            .collect();
+        if !still.is_empty() {
+            writeln!(f, "kept from the last frame (still): {}", still.join(", "))?;
         }
         write!(f, "passes:  {}", self.names().join(", "))
     }

@@ -305,6 +305,42 @@ pub struct Renderer {
     /// [`redraw_shadow_maps`](Renderer::redraw_shadow_maps): shadow maps drawn before it are not
     /// reused.
     shadow_generation: u64,
+    /// What the last frame wrote that a still frame keeps (`None` after a provided G-buffer,
+    /// [`redraw`](Renderer::redraw) or [`reset_history`](Renderer::reset_history)).
+    still: Option<StillKey>,
+}
+
+/// What a frame's [`PassId::same_when_still`] passes wrote depends on: a later frame with the
+/// same key would write the same, and keeps it ([`Plan::reused`]).
+#[derive(PartialEq)]
+struct StillKey {
+    /// The frame constants (the camera, the last frame's camera, the image, the flags).
+    uniform: FrameUniform,
+    /// The names of the frame's passes, drawn or kept, shadow maps aside, sorted.
+    passes: Vec<String>,
+    /// The scene's buffers (a scene uploaded or imported anew has new ones) and its lights.
+    scene: [wgpu::Buffer; 6],
+    /// [`Renderer::geometry_changed`]'s count.
+    generation: u64,
+}
+
+impl StillKey {
+    fn new(uniform: FrameUniform, scene: &SceneBuffers, plan: &Plan, generation: u64) -> StillKey {
+        let mut passes: Vec<String> = plan
+            .passes
+            .iter()
+            .chain(&plan.reused)
+            .filter(|p| !matches!(p, PassId::Shadow { .. }))
+            .map(|p| p.name().into_owned())
+            .collect();
+        passes.sort();
+        let b = scene.buffers();
+        let lights = scene.light_buffer();
+        let scene =
+            [&b.positions, &b.indices, &b.triangle_materials, &b.materials, &b.texels, lights]
+                .map(wgpu::Buffer::clone);
+        StillKey { uniform, passes, scene, generation }
+    }
 }
 
 impl Renderer {
@@ -446,6 +482,7 @@ impl Renderer {
             in_flight: None,
             geometry_generation: 0,
             shadow_generation: 0,
+            still: None,
             settings,
         })
     }
@@ -525,6 +562,7 @@ impl Renderer {
     /// Forgets the previous frame (a camera cut): the next frame rasterizes layer 1 exactly.
     pub fn reset_history(&mut self) {
         self.history = None;
+        self.still = None;
     }
 
     /// Tells the renderer that the scene's geometry or materials changed in place (the host
@@ -552,13 +590,33 @@ impl Renderer {
         self.shadow_generation += 1;
     }
 
+    /// Makes the next frame run every pass of its plan, keeping nothing from earlier frames (the
+    /// shadow maps, and on a still frame the G-buffer, obscurance and direct light;
+    /// [`Plan::reused`]), without taking the geometry for moved: what a benchmark of a whole
+    /// frame's cost calls before each frame. The image is the same either way.
+    pub fn redraw(&mut self) {
+        self.redraw_shadow_maps();
+        self.still = None;
+    }
+
     /// The plan for `scene` seen through `camera` under this renderer's settings (what
     /// [`encode`](Renderer::encode) will run; [`Plan::for_view`]). The first frame of a one-pass
     /// layer-1 variant rasterizes the layers in two passes (`raster.layer0`, `raster.layer1`)
     /// instead of `raster.layers`. A shadow map an
     /// earlier frame drew is kept while nothing it depends on changed (see
     /// [`geometry_changed`](Renderer::geometry_changed)): its pass moves to [`Plan::reused`].
+    ///
+    /// A still frame (the camera and the last frame's camera those of the frame before, the
+    /// scene and its buffers the same, nothing redrawn) keeps the last frame's G-buffer,
+    /// obscurance and direct light: those passes move to [`Plan::reused`] too
+    /// ([`redraw`](Renderer::redraw) makes the next frame run them).
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
+        self.plan_for(scene, camera, false)
+    }
+
+    /// [`plan`](Renderer::plan); `provided`: the caller wrote this frame's G-buffer, so no
+    /// pass is kept for a still frame.
+    fn plan_for(&self, scene: &SceneBuffers, camera: &Camera, provided: bool) -> Plan {
         let mut plan = Plan::for_view(scene.info(), &self.settings, camera);
         let (w, h) = (self.settings.width, self.settings.height);
         let still = self.history.is_none_or(|last| last == CameraMatrices::new(camera, w, h));
@@ -581,7 +639,47 @@ impl Renderer {
             plan.passes.retain(|p| !kept.contains(p));
             plan.reused = kept;
         }
+        if !provided && self.is_still(scene, camera, &plan) {
+            let (kept, run): (Vec<PassId>, Vec<PassId>) =
+                plan.passes.into_iter().partition(PassId::same_when_still);
+            plan.passes = run;
+            plan.reused.extend(kept);
+        }
         plan
+    }
+
+    /// Whether a frame of `plan` (its shadow maps decided) from `camera` would write what the
+    /// last frame's [`PassId::same_when_still`] passes wrote: the same [`StillKey`], and
+    /// nothing drawn this frame that shares the rasterizer's counters (a shadow map, a
+    /// transparency peel).
+    fn is_still(&self, scene: &SceneBuffers, camera: &Camera, plan: &Plan) -> bool {
+        let Some(last) = &self.still else { return false };
+        let draws = plan
+            .passes
+            .iter()
+            .any(|p| matches!(p, PassId::Shadow { .. } | PassId::TransparencyPeel));
+        !draws
+            && *last
+                == StillKey::new(
+                    self.constants(scene, camera, false),
+                    scene,
+                    plan,
+                    self.geometry_generation,
+                )
+    }
+
+    /// The frame constants of a frame from `camera` after this renderer's last frame;
+    /// `moved`: the geometry moved since (the resolve reads its last positions).
+    fn constants(&self, scene: &SceneBuffers, camera: &Camera, moved: bool) -> FrameUniform {
+        let s = &self.settings;
+        let current = CameraMatrices::new(camera, s.width, s.height);
+        let previous = self.history.unwrap_or(current);
+        FrameUniform {
+            flags: FRAME_DIAGNOSTICS
+                | s.position.frame_flags()
+                | if moved { FRAME_OBJECT_MOTION } else { 0 },
+            ..FrameUniform::new(camera, current, previous, s.width, s.height, s.dz, scene.counts())
+        }
     }
 
     /// The plan of the last [`encode`](Renderer::encode).
@@ -630,7 +728,7 @@ impl Renderer {
         let delayed = self.settings.layer1 == crate::Layer1Variant::Delay;
         let shown = if delayed { self.pending.clone() } else { None };
         let camera = shown.as_ref().unwrap_or(given);
-        let mut plan = self.plan(scene, camera);
+        let mut plan = self.plan_for(scene, camera, provided);
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
             // The peels are drawn against the rasterizer's layer 0, which a provided G-buffer
@@ -663,6 +761,12 @@ impl Renderer {
         if let Some(shadows) = self.stages.shadows.as_mut() {
             shadows.drew(scene, &plan, self.shadow_generation);
         }
+        self.still = match (&self.last_frame, provided) {
+            (Some(uniform), false) => {
+                Some(StillKey::new(*uniform, scene, &plan, self.geometry_generation))
+            }
+            _ => None,
+        };
         self.plan = Some(plan);
         self.history = Some(current);
         self.image_camera = Some(camera.clone());
@@ -690,18 +794,13 @@ impl Renderer {
         (camera, given): (&Camera, &Camera),
         plan: &Plan,
     ) -> Result<CameraMatrices> {
+        let moved = plan.contains(&PassId::Resolve)
+            && self.stages.resolve.prepare(device, scene, self.geometry_generation);
+        let uniform = self.constants(scene, camera, moved);
         let s = &self.settings;
         let current = CameraMatrices::new(camera, s.width, s.height);
         let previous = self.history.unwrap_or(current);
         let counts = scene.counts();
-        let moved = plan.contains(&PassId::Resolve)
-            && self.stages.resolve.prepare(device, scene, self.geometry_generation);
-        let uniform = FrameUniform {
-            flags: FRAME_DIAGNOSTICS
-                | s.position.frame_flags()
-                | if moved { FRAME_OBJECT_MOTION } else { 0 },
-            ..FrameUniform::new(camera, current, previous, s.width, s.height, s.dz, counts)
-        };
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniform));
         self.last_frame = Some(uniform);
         // The layer 0 the next frame's layer 1 is tested against: from the camera that frame
@@ -718,7 +817,8 @@ impl Renderer {
             }
         });
         let st = &mut self.stages;
-        st.raster.prepare(device, queue, scene, next.as_ref());
+        let kept = plan.reused.iter().any(PassId::is_gbuffer);
+        st.raster.prepare(device, queue, scene, next.as_ref(), kept);
         if plan.runs(Effect::Shadows) {
             let shadows = ShadowStage::for_plan(st.shadows.take(), device, s, scene, plan)?;
             shadows.prepare(queue, scene);

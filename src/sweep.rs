@@ -517,9 +517,9 @@ pub fn measure(
     let mut changes = [0.0f64; 4];
     let mut previous: Option<Snapshot> = None;
     for i in 0..frames {
-        // Every frame pays for its shadow maps, as a scene with moving geometry would: a static
-        // scene's kept maps would hide what the shadow settings cost.
-        renderer.redraw_shadow_maps();
+        // Every frame pays for every pass, as a scene with moving geometry would: a static
+        // scene's kept shadow maps would hide what the shadow settings cost.
+        renderer.redraw();
         renderer.render(device, queue, scene, &at(i))?;
         if i < SETTLE_FRAMES - 1 {
             continue;

@@ -208,7 +208,8 @@ fn the_renderer_runs_and_times_exactly_the_plan() {
         scene.ambient = ambient;
         let camera = scene.camera_or_default();
         let settings = Settings { layer1: variant, ..Settings::with_size(32, 24) };
-        let r = render_frames(&scene, &[camera.clone(), camera.clone()], settings);
+        // From the third frame of a still camera on, every variant keeps the same passes.
+        let r = render_frames(&scene, &[camera.clone(), camera.clone(), camera.clone()], settings);
         let plan = r.renderer.last_plan().unwrap().clone();
         let planned = r.renderer.plan(&r.buffers, &camera);
         assert_eq!(plan, planned, "the plan is stable from frame to frame");
@@ -400,4 +401,91 @@ fn passes_report_the_bytes_they_bind() {
         .expect("the test device has timestamps");
     assert!(bandwidth.read_bytes_per_s > 1e8 && bandwidth.read_bytes_per_s.is_finite());
     assert!(bandwidth.write_bytes_per_s > 1e8 && bandwidth.write_bytes_per_s.is_finite());
+}
+
+/// A still frame keeps what the frame before wrote and it would write again (the G-buffer, the
+/// obscurance, the direct light) and gathers the radiosity's next bounce on it: its terms are,
+/// bit for bit, those of a renderer that runs every pass. A frame is still when its camera and
+/// the last frame's are those of the frame before (the G-buffer's motion is then the same);
+/// a moved camera, moved geometry, `redraw` or `reset_history` run every pass again.
+#[test]
+fn a_still_frame_keeps_what_it_would_write_again() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let a = scene.camera_or_default();
+    let b = deep_gbuffer::Camera { eye: a.eye + Vec3::new(0.3, 0.1, 0.0), ..a.clone() };
+    let settings = Settings { timings: false, ..Settings::with_size(40, 30) };
+    let mut kept = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings.clone()).unwrap();
+    let mut full = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings).unwrap();
+    // (camera, what happens before the frame, whether the frame is still)
+    let frames = [
+        (&a, "", false),
+        // The first frame's G-buffer has no motion: the second keeps it.
+        (&a, "", true),
+        (&a, "", true),
+        (&b, "", false),
+        // The last frame moved: its G-buffer's motion is not this frame's.
+        (&b, "", false),
+        (&b, "", true),
+        (&a, "", false),
+        (&a, "", false),
+        (&a, "geometry_changed", false),
+        (&a, "", false),
+        (&a, "", true),
+        (&a, "redraw", false),
+        (&a, "", true),
+        (&a, "reset_history", false),
+        (&a, "", true),
+    ];
+    let mut large = 0;
+    for (i, (camera, event, still)) in frames.into_iter().enumerate() {
+        match event {
+            "geometry_changed" => {
+                kept.geometry_changed();
+                full.geometry_changed();
+            }
+            "redraw" => kept.redraw(),
+            "reset_history" => {
+                kept.reset_history();
+                full.reset_history();
+            }
+            _ => {}
+        }
+        full.redraw();
+        for r in [&mut kept, &mut full] {
+            r.render(&g.device, &g.queue, &buffers, camera).unwrap();
+        }
+        let plan = kept.last_plan().unwrap();
+        let same: Vec<&PassId> = plan.passes.iter().filter(|p| p.same_when_still()).collect();
+        let reused: Vec<&PassId> = plan.reused.iter().filter(|p| p.same_when_still()).collect();
+        if still {
+            assert!(same.is_empty(), "frame {i} ({event}) keeps {reused:?}, runs {same:?}");
+            for pass in [PassId::Resolve, PassId::Pyramid, PassId::Ao, PassId::Direct] {
+                assert!(plan.reused.contains(&pass), "frame {i} keeps {pass}");
+            }
+            assert!(plan.contains(&PassId::Radiosity) && plan.contains(&PassId::Composite));
+            assert!(plan.to_string().contains("kept from the last frame (still): raster.clear"));
+        } else {
+            assert!(reused.is_empty(), "frame {i} ({event}) runs every pass, keeps {reused:?}");
+        }
+        assert_eq!(kept.passes(), &plan.passes[..]);
+        let full_plan = full.last_plan().unwrap();
+        assert!(full_plan.reused.is_empty(), "redraw keeps nothing: {:?}", full_plan.reused);
+        let (x, y) = (
+            kept.read_terms(&g.device, &g.queue).unwrap(),
+            full.read_terms(&g.device, &g.queue).unwrap(),
+        );
+        assert_eq!(x.av, y.av, "frame {i}: obscurance");
+        assert_eq!(x.direct, y.direct, "frame {i}: direct light");
+        assert_eq!(x.indirect, y.indirect, "frame {i}: gathered light");
+        assert_eq!(x.hdr, y.hdr, "frame {i}: image");
+        // A still frame draws nothing: the counters are those of the frame before (here the
+        // shadow maps' large triangles, counted in the frames that draw them).
+        let counted = kept.diagnostics(&g.device, &g.queue).unwrap().large_triangles;
+        if still {
+            assert_eq!(counted, large, "frame {i}");
+        }
+        large = counted;
+    }
 }

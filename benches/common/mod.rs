@@ -78,8 +78,9 @@ impl PassTotals {
 
 /// Renders `iters` frames, through `cameras` in turn, and adds each pass's GPU time to
 /// `totals`; returns the frames' summed GPU milliseconds (every pass), which is what criterion
-/// is given. Each frame redraws its shadow maps, as a frame of a scene whose geometry moves does
-/// (a static scene keeps them: see `Renderer::redraw_shadow_maps`), so that their cost shows.
+/// is given. Each frame runs every pass, as a frame of a scene whose geometry moves does (a
+/// static scene keeps its shadow maps, and a still camera its G-buffer, obscurance and direct
+/// light: see `Renderer::redraw`), so that their cost shows.
 pub fn timed_frames(
     gpu: &Gpu,
     renderer: &mut Renderer,
@@ -90,7 +91,7 @@ pub fn timed_frames(
 ) -> f64 {
     let mut sum = 0.0;
     for _ in 0..iters {
-        renderer.redraw_shadow_maps();
+        renderer.redraw();
         let camera = &cameras[totals.frames as usize % cameras.len()];
         renderer.render(&gpu.device, &gpu.queue, scene, camera).unwrap();
         for t in renderer.timings(&gpu.device).unwrap() {

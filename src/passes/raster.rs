@@ -291,6 +291,9 @@ pub(crate) struct RasterStage {
     next_frame: wgpu::Buffer,
     /// Which `vis0` holds this (or, between frames, the last) frame's layer 0.
     current: usize,
+    /// This frame keeps the last frame's layers (a still frame, [`crate::Plan::reused`]): its
+    /// layer 0 is the last frame's, so the "previous" layer 0 is the current one.
+    kept: bool,
     fill: Fill,
     /// The vertex positions `Predict` expects the next frame to have, moving as they moved
     /// since the last (drawn by `raster.next` when the geometry moved), and their extrapolation.
@@ -311,21 +314,27 @@ impl RasterStage {
             fill: Fill::new(device, vis1.size(), u32::MAX),
             vis1,
             current: 0,
+            kept: false,
             predicted: None,
         }
     }
 
-    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer;
-    /// `next`: the frame uniform `raster.next` draws with, when the plan runs it.
+    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer, or
+    /// with `kept` (a still frame) keeps the last frame's layers; `next`: the frame uniform
+    /// `raster.next` draws with, when the plan runs it.
     pub(crate) fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: &SceneBuffers,
         next: Option<&FrameUniform>,
+        kept: bool,
     ) {
         self.rasterizer.reserve(device, scene);
-        self.current = 1 - self.current;
+        self.kept = kept;
+        if !kept {
+            self.current = 1 - self.current;
+        }
         if let Some(next) = next {
             queue.write_buffer(&self.next_frame, 0, bytemuck::bytes_of(next));
             let bytes = scene.position_bytes();
@@ -352,14 +361,14 @@ impl RasterStage {
         &self.vis0[self.current]
     }
 
-    /// The layer 0 of the frame before.
+    /// The layer 0 of the frame before (this frame's on a still frame, which kept it).
     pub(crate) fn previous_vis0(&self) -> &wgpu::Buffer {
-        &self.vis0[1 - self.current]
+        if self.kept { self.vis0() } else { self.next_vis0() }
     }
 
     /// The layer-0 buffer the next frame will write.
     pub(crate) fn next_vis0(&self) -> &wgpu::Buffer {
-        self.previous_vis0()
+        &self.vis0[1 - self.current]
     }
 
     /// Layer 1.
@@ -370,7 +379,10 @@ impl RasterStage {
 
 impl Stage for RasterStage {
     fn begin(&self, _ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
-        rec.encoder().clear_buffer(&self.rasterizer.bins, 0, None);
+        // A still frame draws nothing and keeps the counters of the frame that drew its layers.
+        if !self.kept {
+            rec.encoder().clear_buffer(&self.rasterizer.bins, 0, None);
+        }
     }
 
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
