@@ -99,7 +99,7 @@ fn camera_motion(centre: vec2<f32>, d: f32) -> vec2<f32> {
     if !(pc.w > 1e-20) {
         return vec2<f32>(0.0);
     }
-    let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
+    let prev = clip_to_pixel(pc, vec2<f32>(f32(frame.width), f32(frame.height)));
     return centre - prev;
 }
 

@@ -145,7 +145,7 @@ fn unheld(world: vec3<f32>, n: vec3<f32>) -> f32 {
         return 1.0;
     }
     let size = vec2<f32>(f32(frame.width), f32(frame.height));
-    let px = vec2<f32>((c.x / c.w * 0.5 + 0.5) * size.x, (0.5 - c.y / c.w * 0.5) * size.y);
+    let px = clip_to_pixel(c, size);
     if !(px.x >= 0.0 && px.y >= 0.0 && px.x < size.x && px.y < size.y) {
         return 1.0;
     }

@@ -308,7 +308,7 @@ fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
     if !(pc.w > 0.0) {
         return false;
     }
-    let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
+    let prev = clip_to_pixel(pc, vec2<f32>(f32(frame.width), f32(frame.height)));
     if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
         return false;
     }

@@ -155,7 +155,7 @@ fn reflections_args() {
 // The screen position (pixels) of view-space point q; q lies in front of the camera.
 fn project(q: vec3<f32>) -> vec2<f32> {
     let c = mat_mul(frame.proj, vec4<f32>(q, 1.0));
-    return vec2<f32>((c.x / c.w * 0.5 + 0.5) * f32(frame.width), (0.5 - c.y / c.w * 0.5) * f32(frame.height));
+    return clip_to_pixel(c, vec2<f32>(f32(frame.width), f32(frame.height)));
 }
 
 // What varies linearly along a screen-space segment: 1/z of view depth z (z itself for an

@@ -211,7 +211,7 @@ fn shade(pixel: vec2<u32>) -> GSample {
     }
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(was, 1.0));
     if pc.w > 1e-20 {
-        let prev = vec2<f32>((pc.x / pc.w * 0.5 + 0.5) * f32(frame.width), (0.5 - pc.y / pc.w * 0.5) * f32(frame.height));
+        let prev = clip_to_pixel(pc, vec2<f32>(f32(frame.width), f32(frame.height)));
         let motion = vec2<f32>(pixel) + 0.5 - prev;
         if all(abs(motion) < vec2<f32>(1e30)) {
             s.motion = motion;

@@ -11,6 +11,17 @@ pub fn mat_mul(m: &[[f32; 4]; 4], v: [f32; 4]) -> Vec4 {
     }))
 }
 
+/// As `clip_to_pixel`: the pixel coordinate of clip position `c` (`c.w > 0`) on an image of
+/// `size` pixels.
+pub fn clip_to_pixel(c: Vec4, size: Vec2) -> Vec2 {
+    Vec2::new((c.x / c.w * 0.5 + 0.5) * size.x, (0.5 - c.y / c.w * 0.5) * size.y)
+}
+
+/// The image size of `f` in pixels, as the kernels' `vec2<f32>(f32(frame.width), ...)`.
+pub fn image_size(f: &FrameUniform) -> Vec2 {
+    Vec2::new(f.width as f32, f.height as f32)
+}
+
 /// As `view_position`: the view-space point at view depth `d` through pixel coordinate `px`.
 pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
     let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);

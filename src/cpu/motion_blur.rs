@@ -5,6 +5,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::cpu::composite::layer1_radiance;
+use crate::cpu::frame::{clip_to_pixel, image_size};
 use crate::cpu::spiral::pixel_hash;
 use crate::frame::{FrameUniform, MOTION_TILE, MotionBlurUniform};
 use crate::gbuffer::GSample;
@@ -49,11 +50,7 @@ fn camera_motion(f: &FrameUniform, centre: Vec2, d: f32) -> Vec2 {
     if pc.w.is_nan() || pc.w <= 1e-20 {
         return Vec2::ZERO;
     }
-    let prev = Vec2::new(
-        (pc.x / pc.w * 0.5 + 0.5) * f.width as f32,
-        (0.5 - pc.y / pc.w * 0.5) * f.height as f32,
-    );
-    centre - prev
+    centre - clip_to_pixel(pc, image_size(f))
 }
 
 impl Fastest {

@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::direct::light_at;
-use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, view_position};
 use crate::cpu::spiral::pixels_per_unit;
 use crate::frame::{
     Cluster, FrameUniform, OffscreenUniform, RSM_CLUSTER_SIDE, RSM_CLUSTERS_PER_FACE,
@@ -53,8 +53,8 @@ impl Rsm<'_> {
         if c.w.is_nan() || c.w <= 0.0 {
             return 1.0;
         }
-        let size = Vec2::new(f.width as f32, f.height as f32);
-        let px = Vec2::new((c.x / c.w * 0.5 + 0.5) * size.x, (0.5 - c.y / c.w * 0.5) * size.y);
+        let size = image_size(f);
+        let px = clip_to_pixel(c, size);
         if !(px.x >= 0.0 && px.y >= 0.0 && px.x < size.x && px.y < size.y) {
             return 1.0;
         }

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::cpu::frame::mat_mul;
+use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul};
 use crate::cpu::resolve::{triangle_opacity, unit};
 use crate::frame::FrameUniform;
 use crate::gbuffer::{VIS_EMPTY, vis_pack};
@@ -316,19 +316,14 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
         return depth_of(zref[(y * f.width + x) as usize]).is_some_and(|z0| d > z0 + f.dz);
     }
     let (pc, prev_d) = f.reproject(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5), d);
-    let pc = pc.to_array();
-    if pc[3].is_nan() || pc[3] <= 0.0 {
+    if pc.w.is_nan() || pc.w <= 0.0 {
         return false;
     }
-    let prev = [
-        (pc[0] / pc[3] * 0.5 + 0.5) * f.width as f32,
-        (0.5 - pc[1] / pc[3] * 0.5) * f.height as f32,
-    ];
-    if !(prev[0] >= 0.0 && prev[1] >= 0.0 && prev[0] < f.width as f32 && prev[1] < f.height as f32)
-    {
+    let prev = clip_to_pixel(pc, image_size(f));
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f.width as f32 && prev.y < f.height as f32) {
         return false;
     }
-    let (px, py) = (prev[0] as u32, prev[1] as u32);
+    let (px, py) = (prev.x as u32, prev.y as u32);
     depth_of(zref[(py * f.width + px) as usize]).is_some_and(|z0| prev_d > z0 + f.dz)
 }
 

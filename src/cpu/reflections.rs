@@ -4,7 +4,7 @@ use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::composite::shaded;
 use crate::cpu::direct::lit;
-use crate::cpu::frame::{mat_mul, screen_exit, view_position};
+use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, screen_exit, view_position};
 use crate::cpu::pyramid::nearest;
 use crate::cpu::shadow::Shadows;
 use crate::environment::Environment;
@@ -23,7 +23,7 @@ const NEAR_MARGIN: f32 = 1.001;
 /// The screen position (pixels) of view-space point q in front of the camera.
 fn project(f: &FrameUniform, q: Vec3) -> Vec2 {
     let c = mat_mul(&f.proj, q.extend(1.0).to_array());
-    Vec2::new((c.x / c.w * 0.5 + 0.5) * f.width as f32, (0.5 - c.y / c.w * 0.5) * f.height as f32)
+    clip_to_pixel(c, image_size(f))
 }
 
 /// 1/z of view depth z (z for an orthographic camera): linear along a screen-space segment.

@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
-use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, view_position};
 use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, VIS_EMPTY};
 use crate::scene::{Filter, Material, Scene, Texture, TextureRef, Wrap};
@@ -368,10 +368,7 @@ pub fn resolve_pixel_moved(
     };
     let pc = mat_mul(&f.prev_view_proj, was.extend(1.0).to_array());
     if pc.w > 1e-20 {
-        let prev = Vec2::new(
-            (pc.x / pc.w * 0.5 + 0.5) * f.width as f32,
-            (0.5 - pc.y / pc.w * 0.5) * f.height as f32,
-        );
+        let prev = clip_to_pixel(pc, image_size(f));
         let motion = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - prev;
         if motion.abs().cmplt(Vec2::splat(1e30)).all() {
             s.motion = motion;

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::cpu::frame::mat_mul;
+use crate::cpu::frame::{clip_to_pixel, mat_mul};
 use crate::cpu::raster::{RasterInput, double_sided_triangles, raster_layer0};
 use crate::frame::{ShadowFace, light_faces};
 use crate::scene::{GpuLight, Scene, SceneInfo};
@@ -77,7 +77,7 @@ pub fn shadow(sh: &Shadows, i: usize, light: &GpuLight, world: Vec3, n: Vec3, l:
         return 1.0;
     }
     let res = f.resolution as f32;
-    let uv = Vec2::new((c.x / c.w * 0.5 + 0.5) * res, (0.5 - c.y / c.w * 0.5) * res);
+    let uv = clip_to_pixel(c, Vec2::splat(res));
     let depth = -vp.z;
     let cos_theta = n.dot(l).clamp(0.05, 1.0);
     let tan_theta = (1.0 - cos_theta * cos_theta).sqrt() / cos_theta;

@@ -46,6 +46,12 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
 }
 
+// The pixel coordinate of clip position c (c.w > 0) on an image of `size` pixels (the camera's
+// image, or a shadow map's face): where view_position's ray through it passes.
+fn clip_to_pixel(c: vec4<f32>, size: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>((c.x / c.w * 0.5 + 0.5) * size.x, (0.5 - c.y / c.w * 0.5) * size.y);
+}
+
 // The parameter t where the line a + t d (pixel coordinates) leaves the screen, for t >= 0 and
 // a on screen (3.4e38 where d is zero).
 fn screen_exit(f: Frame, a: vec2<f32>, d: vec2<f32>) -> f32 {

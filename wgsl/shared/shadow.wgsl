@@ -1,6 +1,6 @@
 // Shadow-map lookup: percentage-closer filtering over depth maps drawn by the compute rasterizer
 // (visibility words, depth in the high word). Mirrors `ShadowFace` in src/frame/shadow.rs;
-// src/cpu/direct.rs has the same functions.
+// src/cpu/direct.rs has the same functions. Needs shared/frame.wgsl.
 
 struct ShadowFace {
     view: mat4x4<f32>,
@@ -59,7 +59,7 @@ fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>, pc
         return 1.0;
     }
     let res = f32(f.resolution);
-    let uv = vec2<f32>((c.x / c.w * 0.5 + 0.5) * res, (0.5 - c.y / c.w * 0.5) * res);
+    let uv = clip_to_pixel(c, vec2<f32>(res));
     let depth = -mat_mul(f.view, vec4<f32>(p, 1.0)).z;
     let cos_theta = clamp(dot(n, l), 0.05, 1.0);
     let tan_theta = sqrt(1.0 - cos_theta * cos_theta) / cos_theta;
