@@ -567,10 +567,12 @@ impl Renderer {
 
     /// Tells the renderer that the scene's geometry or materials changed in place (the host
     /// wrote new positions, indices or materials into the buffers a [`SceneBuffers`] holds): the
-    /// next frame redraws every shadow map. Without it, a light's shadow map is drawn once and
-    /// kept while the light, the scene's bounds, the shadow settings and the scene's buffers
-    /// (a scene uploaded or imported anew has new ones) stay the same; the plan lists the kept
-    /// ones in [`Plan::reused`]. The camera does not matter: it may move freely.
+    /// next frame redraws every shadow map and runs every pass a still frame would keep.
+    /// Without it, a light's shadow map is drawn once and kept while the light, the scene's
+    /// bounds, the shadow settings and the scene's buffers (a scene uploaded or imported anew
+    /// has new ones) stay the same, and a still camera keeps its G-buffer, obscurance and direct
+    /// light; the plan lists the kept passes in [`Plan::reused`]. For the shadow maps the camera
+    /// does not matter: it may move freely.
     ///
     /// It also gives moving geometry its motion: the renderer keeps a copy of the scene's vertex
     /// positions as the last frame drew them (two position buffers' worth of memory; copied on a
