@@ -33,7 +33,8 @@ use crate::scene::Camera;
 use crate::settings::{AtomicPath, RasterWork, Settings};
 use crate::{Error, Result, SceneBuffers};
 
-/// Counters the GPU keeps while rasterizing, read with [`Renderer::diagnostics`].
+/// Counters the GPU keeps while rasterizing, read with [`Renderer::diagnostics`]. A still frame
+/// draws nothing ([`Plan::reused`]) and keeps the counters of the frame that drew its G-buffer.
 ///
 /// The `rejected_*` and `untextured_triangles` counters check what the CPU cannot: the contents
 /// of a host's [imported](crate::SceneBuffers::import) buffers. A rejected triangle is not drawn
@@ -1317,7 +1318,8 @@ impl Renderer {
         &self.frame
     }
 
-    /// Reads the raster counters and the bad-input counts of the last frame (waits for the GPU).
+    /// Reads the raster counters and the bad-input counts of the last frame that drew the G-buffer
+    /// (waits for the GPU).
     pub fn diagnostics(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Diagnostics> {
         Ok(self.stages.raster.rasterizer.counters(device, queue)?.into())
     }
