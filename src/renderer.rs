@@ -709,9 +709,14 @@ impl Renderer {
         scene: &SceneBuffers,
         camera: &Camera,
     ) -> Result<()> {
-        gpu::scoped(device, "deep-gbuffer.frame", || {
+        let result = gpu::scoped(device, "deep-gbuffer.frame", || {
             self.encode_frame(device, queue, encoder, scene, camera, false)
-        })
+        });
+        // A frame that failed wrote nothing a still frame could keep.
+        if result.is_err() {
+            self.still = None;
+        }
+        result
     }
 
     /// Records a frame; `provided`: the G-buffer layers and visibility depths were written by
@@ -732,6 +737,8 @@ impl Renderer {
         let shown = if delayed { self.pending.clone() } else { None };
         let camera = shown.as_ref().unwrap_or(given);
         let mut plan = self.plan_for(scene, camera, provided);
+        // Set again once the frame is recorded: a frame that stops on an error keeps nothing.
+        self.still = None;
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
             // The peels are drawn against the rasterizer's layer 0, which a provided G-buffer
@@ -1050,7 +1057,7 @@ impl Renderer {
         camera: &Camera,
         provided: bool,
     ) -> Result<()> {
-        gpu::scoped(device, "deep-gbuffer.frame", || {
+        let result = gpu::scoped(device, "deep-gbuffer.frame", || {
             let label = Some("deep-gbuffer.frame");
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label });
@@ -1068,7 +1075,11 @@ impl Renderer {
                     })?;
             }
             Ok(())
-        })
+        });
+        if result.is_err() {
+            self.still = None;
+        }
+        result
     }
 
     /// Per-pass GPU times of the last submitted frame (empty without `TIMESTAMP_QUERY`), named
