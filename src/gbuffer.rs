@@ -319,7 +319,7 @@ impl GBufferLayer {
                 )
             })
             .collect();
-        crate::output::write_replacing(path, |tmp| {
+        crate::files::write_replacing(path, |tmp| {
             Image::from_layers(
                 ImageAttributes::new(IntegerBounds::from_dimensions(
                     exr_layers.first().map_or((0, 0), |l| l.size.into()),

@@ -40,6 +40,7 @@ pub struct ReadmeDoctests;
 pub mod cpu;
 pub mod environment;
 mod error;
+mod files;
 pub mod frame;
 pub mod gbuffer;
 pub mod gpu;

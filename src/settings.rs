@@ -104,15 +104,6 @@ impl PositionEncoding {
             PositionEncoding::ScreenU16 | PositionEncoding::ViewF16 => 6,
         }
     }
-
-    /// Its [`FrameUniform::flags`](crate::frame::FrameUniform) bits.
-    pub fn frame_flags(self) -> u32 {
-        match self {
-            PositionEncoding::ViewDepthF32 => 0,
-            PositionEncoding::ScreenU16 => crate::frame::FRAME_POSITION_SCREEN_U16,
-            PositionEncoding::ViewF16 => crate::frame::FRAME_POSITION_VIEW_F16,
-        }
-    }
 }
 
 /// How the obscurance pass estimates `1 - (1/pi) integral max(1 - d^2/r^2, 0) cos(theta) dw`

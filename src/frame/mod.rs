@@ -173,6 +173,17 @@ pub const FRAME_POSITION_SCREEN_U16: u32 = 2;
 /// [`FrameUniform::flags`] bit: the G-buffer holds positions as
 /// [`PositionEncoding::ViewF16`](crate::PositionEncoding::ViewF16) would.
 pub const FRAME_POSITION_VIEW_F16: u32 = 4;
+impl crate::settings::PositionEncoding {
+    /// Its [`FrameUniform::flags`] bits.
+    pub fn frame_flags(self) -> u32 {
+        match self {
+            Self::ViewDepthF32 => 0,
+            Self::ScreenU16 => FRAME_POSITION_SCREEN_U16,
+            Self::ViewF16 => FRAME_POSITION_VIEW_F16,
+        }
+    }
+}
+
 /// [`FrameUniform::flags`] bit: the geometry moved since the last frame; the resolve reads each
 /// vertex's last position from the previous-positions buffer for the motion vectors (without
 /// it the geometry is taken as still, and only the camera moves).
