@@ -306,9 +306,15 @@ pub struct Renderer {
     /// [`redraw_shadow_maps`](Renderer::redraw_shadow_maps): shadow maps drawn before it are not
     /// reused.
     shadow_generation: u64,
-    /// What the last frame wrote that a still frame keeps (`None` after a provided G-buffer,
-    /// [`redraw`](Renderer::redraw) or [`reset_history`](Renderer::reset_history)).
+    /// What the last frame wrote that a still frame keeps (`None` after a provided G-buffer or
+    /// [`reset_history`](Renderer::reset_history)).
     still: Option<StillKey>,
+    /// [`redraw`](Renderer::redraw) was called: the next frame keeps nothing.
+    redraw: bool,
+    /// Frames in a row whose view (camera, last camera, scene) was the last frame's: the
+    /// radiosity's filter averages longer as it grows
+    /// ([`RadiositySettings::history_weight`](crate::RadiositySettings::history_weight)).
+    still_frames: u32,
 }
 
 /// What a frame's [`PassId::same_when_still`] passes wrote depends on: a later frame with the
@@ -484,6 +490,8 @@ impl Renderer {
             geometry_generation: 0,
             shadow_generation: 0,
             still: None,
+            redraw: false,
+            still_frames: 0,
             settings,
         })
     }
@@ -599,7 +607,7 @@ impl Renderer {
     /// frame's cost calls before each frame. The image is the same either way.
     pub fn redraw(&mut self) {
         self.redraw_shadow_maps();
-        self.still = None;
+        self.redraw = true;
     }
 
     /// The plan for `scene` seen through `camera` under this renderer's settings (what
@@ -656,19 +664,24 @@ impl Renderer {
     /// nothing drawn this frame that shares the rasterizer's counters (a shadow map, a
     /// transparency peel).
     fn is_still(&self, scene: &SceneBuffers, camera: &Camera, plan: &Plan) -> bool {
-        let Some(last) = &self.still else { return false };
         let draws = plan
             .passes
             .iter()
             .any(|p| matches!(p, PassId::Shadow { .. } | PassId::TransparencyPeel));
-        !draws
-            && *last
-                == StillKey::new(
-                    self.constants(scene, camera, false),
-                    scene,
-                    plan,
-                    self.geometry_generation,
-                )
+        !draws && !self.redraw && self.same_view(scene, camera, plan)
+    }
+
+    /// Whether a frame of `plan` from `camera` has the last frame's [`StillKey`]: the same
+    /// camera, last camera, scene and passes.
+    fn same_view(&self, scene: &SceneBuffers, camera: &Camera, plan: &Plan) -> bool {
+        let Some(last) = &self.still else { return false };
+        let key = StillKey::new(
+            self.constants(scene, camera, false),
+            scene,
+            plan,
+            self.geometry_generation,
+        );
+        *last == key
     }
 
     /// The frame constants of a frame from `camera` after this renderer's last frame;
@@ -737,8 +750,14 @@ impl Renderer {
         let shown = if delayed { self.pending.clone() } else { None };
         let camera = shown.as_ref().unwrap_or(given);
         let mut plan = self.plan_for(scene, camera, provided);
+        self.still_frames = if !provided && self.same_view(scene, camera, &plan) {
+            self.still_frames + 1
+        } else {
+            0
+        };
         // Set again once the frame is recorded: a frame that stops on an error keeps nothing.
         self.still = None;
+        self.redraw = false;
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
             // The peels are drawn against the rasterizer's layer 0, which a provided G-buffer
@@ -847,7 +866,7 @@ impl Renderer {
             // The reflective shadow maps' faces the off-screen light sums (none without it).
             let offscreen =
                 st.shadows.as_ref().and_then(|s| s.rsm_inputs(plan)).map_or(0, |r| r.count);
-            radiosity.prepare(device, queue, s, history, plan, offscreen);
+            radiosity.prepare(device, queue, s, (history, self.still_frames), plan, offscreen);
         }
         if plan.runs(Effect::Reflections) {
             let reflections =

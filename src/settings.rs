@@ -357,7 +357,8 @@ pub struct RadiositySettings {
     pub samples: u32,
     /// Damping delta in (0, 1] of the indirect light fed back for the next bounce.
     pub damping: f32,
-    /// Weight alpha in [0, 1) of the history in the temporal filter.
+    /// Weight alpha in [0, 1) of the history in the temporal filter. A view that stands still
+    /// averages longer once its bounces have settled ([`history_weight`](Self::history_weight)).
     pub alpha: f32,
     /// History is kept where the reprojected point lies within this distance (scene units,
     /// along the previous view axis) of the previous layer 0, whose irradiance the history
@@ -494,6 +495,39 @@ impl Default for RadiositySettings {
 }
 
 impl RadiositySettings {
+    /// Still frames in a row after which the temporal filter starts to average rather than
+    /// forget: the frames the bounces take to settle. Each frame leaves at most `c = alpha +
+    /// (1 - alpha) feedback_gain` of the history's distance to its fixed point (0.97 with the
+    /// defaults), so after `ln(1e-3) / ln c` frames (227) less than a thousandth of it is left,
+    /// and the slower filter after it costs no more than that.
+    pub fn settle_frames(&self) -> u32 {
+        let c = self.alpha + (1.0 - self.alpha) * self.feedback_gain();
+        if !(c > 0.0 && c < 1.0) {
+            return 0;
+        }
+        (1e-3f32.ln() / c.ln()).ceil().min(u32::MAX as f32) as u32
+    }
+
+    /// The most frames a still view's filter averages over (its history weight stops at
+    /// `1 - 1/1024`, where a new frame still counts in f32).
+    pub const LONGEST_AVERAGE: u32 = 1024;
+
+    /// The temporal filter's weight of the history on the `still`-th still frame in a row (0: the
+    /// camera or the scene moved, or a first frame): `alpha`, and past
+    /// [`settle_frames`](Self::settle_frames) `max(alpha, 1 - 1 / (n + 1))` with `n` the frames
+    /// past it (at most [`LONGEST_AVERAGE`](Self::LONGEST_AVERAGE)): the mean of the frames
+    /// since, so that the gather's noise, which the turned slices make different every frame,
+    /// falls as the view stands and stops flickering, where an exponential filter would keep it
+    /// at `sqrt((1 - alpha) / (1 + alpha))` of one frame's. Without [`jitter`](Self::jitter)
+    /// every frame gathers the same taps: there is no noise to average, and it stays `alpha`.
+    pub fn history_weight(&self, still: u32) -> f32 {
+        if !self.jitter {
+            return self.alpha;
+        }
+        let n = still.saturating_sub(self.settle_frames()).min(Self::LONGEST_AVERAGE - 1);
+        self.alpha.max(1.0 - 1.0 / (n as f32 + 1.0))
+    }
+
     /// Checks every field's range.
     pub fn validate(&self) -> Result<()> {
         if !(1..=16).contains(&self.slices) {

@@ -504,3 +504,48 @@ fn radiosity_of_stored_gbuffers_matches_cpu_reference() {
         assert!(raw.iter().any(|e| e.truncate().max_element() > 0.01), "{file} is lit");
     }
 }
+
+/// A view that stands still stops flickering: once its bounces have settled
+/// (`RadiositySettings::settle_frames`), the temporal filter averages the frames since
+/// (`history_weight`), so the gathered light changes less and less from one frame to the next,
+/// where the exponential filter keeps the turned slices' noise; a camera move starts over.
+#[test]
+fn a_still_view_stops_flickering() {
+    let r = RadiositySettings::default();
+    let settle = r.settle_frames();
+    // alpha 0.85 and a feedback gain of at most 0.8: 0.97 a frame, 227 frames to 1e-3.
+    assert_eq!(settle, 227);
+    assert_eq!(r.history_weight(0), r.alpha);
+    assert_eq!(r.history_weight(settle + 5), r.alpha, "1 - 1/6 is below alpha");
+    assert!((r.history_weight(settle + 99) - 0.99).abs() < 1e-6);
+    assert!((r.history_weight(u32::MAX) - (1.0 - 1.0 / 1024.0)).abs() < 1e-6);
+    let fixed = RadiositySettings { jitter: false, ..r.clone() };
+    assert_eq!(fixed.history_weight(settle + 99), r.alpha, "no noise to average without jitter");
+
+    let g = gpu();
+    let (camera, buffers) = cornell_uploaded();
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings(32, 24)).unwrap();
+    // The mean per-pixel change of the filtered irradiance from the frame before.
+    let mut last: Vec<Vec4> = Vec::new();
+    let mut step = |renderer: &mut Renderer, camera: &Camera| {
+        renderer.render(&g.device, &g.queue, &buffers, camera).unwrap();
+        let now = read4(renderer, renderer.radiosity_buffers().unwrap().filtered);
+        let change = now.iter().zip(&last).map(|(a, b)| (*a - *b).truncate().abs().element_sum());
+        let mean = change.sum::<f32>() / now.len() as f32;
+        last = now;
+        mean
+    };
+    let changes: Vec<f32> = (0..settle + 200).map(|_| step(&mut renderer, &camera)).collect();
+    let exponential = changes[settle as usize - 20..settle as usize].iter().sum::<f32>() / 20.0;
+    let averaged = changes[changes.len() - 20..].iter().sum::<f32>() / 20.0;
+    eprintln!("mean change a frame: {exponential} before it settles, {averaged} 200 frames after");
+    assert!(exponential > 0.0, "the turned slices change the estimate");
+    assert!(averaged < 0.1 * exponential, "{averaged} against {exponential}");
+
+    // A move starts over: until it settles again the filter forgets as fast as before.
+    let moved = Camera { eye: camera.eye + glam::Vec3::new(0.05, 0.0, 0.0), ..camera.clone() };
+    let again: Vec<f32> = (0..settle).map(|_| step(&mut renderer, &moved)).collect();
+    let before_settling = again[settle as usize - 20..].iter().sum::<f32>() / 20.0;
+    eprintln!("after a move: {before_settling}");
+    assert!(before_settling > 0.5 * exponential, "{before_settling} against {exponential}");
+}

@@ -117,7 +117,8 @@ impl RadiosityStage {
     }
 
     /// Starts a frame: filters into the other history buffer and writes the constants;
-    /// `history` tells whether the last frame's irradiance may be used; `plan` whether this
+    /// `history` tells whether the last frame's irradiance may be used, `still` how many frames
+    /// in a row the view has stood still (the filter's weight, `history_weight`); `plan` whether this
     /// frame runs the layer-1 gather, and the off-screen light over `offscreen` reflective
     /// shadow map faces.
     pub(crate) fn prepare(
@@ -125,7 +126,7 @@ impl RadiosityStage {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         s: &Settings,
-        history: bool,
+        (history, still): (bool, u32),
         plan: &Plan,
         offscreen: u32,
     ) {
@@ -147,7 +148,10 @@ impl RadiosityStage {
         }
         self.current = 1 - self.current;
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
-        let uniform = RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn);
+        let uniform = RadiosityUniform {
+            alpha: s.radiosity.history_weight(still),
+            ..RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn)
+        };
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         if plan.contains(&PassId::RadiosityOffscreen) {
             let o = Offscreen::for_faces(self.offscreen.take(), device, offscreen);
