@@ -325,7 +325,7 @@ struct StillKey {
     uniform: FrameUniform,
     /// The names of the frame's passes, drawn or kept, shadow maps aside, sorted.
     passes: Vec<String>,
-    /// The scene's buffers (a scene uploaded or imported anew has new ones) and its lights.
+    /// The scene's buffers ([`SceneBuffers::identity`]).
     scene: [wgpu::Buffer; 6],
     /// [`Renderer::geometry_changed`]'s count.
     generation: u64,
@@ -341,12 +341,7 @@ impl StillKey {
             .map(|p| p.name().into_owned())
             .collect();
         passes.sort();
-        let b = scene.buffers();
-        let lights = scene.light_buffer();
-        let scene =
-            [&b.positions, &b.indices, &b.triangle_materials, &b.materials, &b.texels, lights]
-                .map(wgpu::Buffer::clone);
-        StillKey { uniform, passes, scene, generation }
+        StillKey { uniform, passes, scene: scene.identity(), generation }
     }
 }
 

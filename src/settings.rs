@@ -505,7 +505,8 @@ impl RadiositySettings {
         if !(c > 0.0 && c < 1.0) {
             return 0;
         }
-        (1e-3f32.ln() / c.ln()).ceil().min(u32::MAX as f32) as u32
+        // A float-to-integer cast saturates.
+        (1e-3f32.ln() / c.ln()).ceil() as u32
     }
 
     /// The most frames a still view's filter averages over (its history weight stops at

@@ -319,8 +319,9 @@ fn layer1_accepts(f: &FrameUniform, zref: &[u64], x: u32, y: u32, d: f32, reproj
     if pc.w.is_nan() || pc.w <= 0.0 {
         return false;
     }
-    let prev = clip_to_pixel(pc, image_size(f));
-    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f.width as f32 && prev.y < f.height as f32) {
+    let size = image_size(f);
+    let prev = clip_to_pixel(pc, size);
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < size.x && prev.y < size.y) {
         return false;
     }
     let (px, py) = (prev.x as u32, prev.y as u32);

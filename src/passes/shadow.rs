@@ -35,8 +35,8 @@ struct Group {
 /// What a light's faces were drawn from: while it is unchanged, they are kept.
 #[derive(PartialEq)]
 struct Drawn {
-    /// The buffers the rasterizer reads (a re-uploaded scene has new ones).
-    geometry: [wgpu::Buffer; 4],
+    /// The scene's buffers ([`SceneBuffers::identity`]: a re-uploaded scene has new ones).
+    geometry: [wgpu::Buffer; 6],
     /// The faces' frame uniforms: cameras, resolution and the scene's counts.
     faces: Vec<u8>,
     /// [`Renderer::geometry_changed`](crate::Renderer::geometry_changed)'s count.
@@ -52,10 +52,8 @@ impl Drawn {
         generation: u64,
         plan: &Plan,
     ) -> Drawn {
-        let b = scene.buffers();
         Drawn {
-            geometry: [&b.positions, &b.indices, &b.triangle_materials, &b.materials]
-                .map(wgpu::Buffer::clone),
+            geometry: scene.identity(),
             faces: faces.iter().flat_map(|(u, _)| bytemuck::bytes_of(u).to_vec()).collect(),
             generation,
             rsm: wants_rsm(plan),

@@ -396,6 +396,16 @@ impl SceneBuffers {
         self.b.triangle_count
     }
 
+    /// The buffers whose contents a frame's raster, resolve and lights read (positions,
+    /// indices, triangle materials, materials, texels, lights), as handles: a scene uploaded or
+    /// imported anew has new ones, which is how kept results (shadow maps, a still frame's
+    /// G-buffer) know the scene changed.
+    pub(crate) fn identity(&self) -> [wgpu::Buffer; 6] {
+        let b = &self.b;
+        [&b.positions, &b.indices, &b.triangle_materials, &b.materials, &b.texels, &self.lights]
+            .map(wgpu::Buffer::clone)
+    }
+
     /// (triangles, materials, vertices): the counts a raster's frame uniform carries.
     pub(crate) fn counts(&self) -> (u32, u32, u32) {
         (self.b.triangle_count, self.b.material_count, self.b.vertex_count)
