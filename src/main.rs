@@ -441,6 +441,10 @@ struct ReflectionArgs {
     /// for smoother ones; 1: the mirror ray alone) [default: 8].
     #[arg(long)]
     reflection_lobe_samples: Option<u32>,
+    /// Leave the rays the screen cannot place at the environment instead of following them
+    /// through the lights' shadow maps (faster where much reflects the sky).
+    #[arg(long)]
+    reflection_screen_only: bool,
 }
 
 impl ReflectionArgs {
@@ -449,6 +453,9 @@ impl ReflectionArgs {
         r.max_distance = self.reflection_distance.unwrap_or(r.max_distance);
         r.thickness = self.reflection_thickness.unwrap_or(r.thickness);
         r.lobe_samples = self.reflection_lobe_samples.unwrap_or(r.lobe_samples);
+        if self.reflection_screen_only {
+            r.shadow_maps = false;
+        }
     }
 }
 

@@ -643,6 +643,11 @@ pub struct ReflectionSettings {
     /// roughness 0.5 or more, in 1..=64; a smoother surface takes fewer in proportion to its
     /// roughness (at least 2), and roughness 0 is a mirror. 1 traces the mirror ray alone.
     pub lobe_samples: u32,
+    /// Follow the mirror rays the screen cannot place (those that find nothing on screen, run
+    /// into the side of a solid the camera does not see, or hit a silhouette) through the
+    /// lights' shadow maps, where the surfaces each light sees first are held, lit
+    /// (`wgsl/reflections.wgsl`, `reflections_hidden`). Only where the frame draws shadow maps.
+    pub shadow_maps: bool,
 }
 
 impl Default for ReflectionSettings {
@@ -652,6 +657,7 @@ impl Default for ReflectionSettings {
             max_distance: f32::INFINITY,
             thickness: 0.1,
             lobe_samples: 8,
+            shadow_maps: true,
         }
     }
 }

@@ -31,14 +31,14 @@ fn reflective_spheres_match_cpu_reference() {
 
 /// The GPU march of `renderer`'s last frame of `scene` against the CPU march on both layers,
 /// hit surfaces shaded with the scene's lights (re-lit towards the ray's origin), the frame's
-/// obscurance and gathered irradiance, and the scene's constant ambient.
+/// obscurance and gathered irradiance, and the scene's constant ambient; returns the CPU's.
 fn march_matches(
     renderer: &Renderer,
     frame: &deep_gbuffer::frame::FrameUniform,
     layers: [&[deep_gbuffer::GSample]; 2],
     scene: &Scene,
     what: &str,
-) {
+) -> Vec<Vec4> {
     let ambient = scene.ambient;
     let g = gpu();
     let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
@@ -58,11 +58,14 @@ fn march_matches(
         shadows: Some(&shadows),
         av: Some(&av),
         irradiance: Some(&irradiance),
+        // The rays the screen cannot place followed through the same shadow maps.
+        follow: renderer.settings().reflections.shadow_maps.then_some(scene),
     };
     let s = &renderer.settings().reflections;
     let layout = deep_gbuffer::frame::PyramidLayout::new(frame.width, frame.height);
     let size = (frame.width, frame.height);
-    let uniform = ReflectionsUniform::new(s, size, &layout, true, ambient.to_array(), None);
+    let uniform = ReflectionsUniform::new(s, size, &layout, true, ambient.to_array(), None)
+        .with_bounds(scene.bounds());
     let expected = cpu::reflections(frame, &uniform, layers, &shading, None);
     let actual = read4(renderer, renderer.reflections_buffer().unwrap());
     let far = |a: &Vec4, e: &Vec4| (*a - *e).abs().max_element() > 1e-3 * e.max_element().max(1.0);
@@ -71,6 +74,7 @@ fn march_matches(
     assert!(actual.iter().all(|v| v.is_finite()));
     let hits = expected.iter().filter(|v| v.w > 0.5).count();
     assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
+    expected
 }
 
 /// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
@@ -516,6 +520,7 @@ fn invalid_reflection_settings_are_refused() {
             thickness,
             lobe_samples,
             enabled: true,
+            shadow_maps: true,
         };
         match Renderer::new(&g.device, &g.queue, with(s)) {
             Err(Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
@@ -526,4 +531,129 @@ fn invalid_reflection_settings_are_refused() {
     let unbounded = deep_gbuffer::ReflectionSettings::default();
     assert_eq!(unbounded.max_distance, f32::INFINITY);
     assert!(Renderer::new(&g.device, &g.queue, with(unbounded)).is_ok());
+}
+
+/// A mirror wall at z = -2 behind a box whose face towards the mirror the camera does not see;
+/// a sun behind the mirror, high enough to clear its top edge, lights that face. The box's faces are single-sided quads
+/// (outward normals, counter-clockwise seen from outside), material 1.
+fn a_box_before_a_mirror() -> Scene {
+    let mut scene = Scene::default();
+    scene.materials.push(Material {
+        name: "mirror".into(),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        reflectivity: 1.0,
+        roughness: 0.0,
+        double_sided: true,
+        ..Default::default()
+    });
+    scene.materials.push(Material {
+        name: "box".into(),
+        base_color: Vec4::new(0.8, 0.5, 0.2, 1.0),
+        roughness: 1.0,
+        ..Default::default()
+    });
+    let mirror = [[-4.0, -1.0, -2.0], [4.0, -1.0, -2.0], [4.0, 2.5, -2.0], [-4.0, 2.5, -2.0]];
+    let mut quads = vec![(mirror.map(Vec3::from), Vec3::Z, 0)];
+    // The unit cube about (0, 1, 0): each face's corners counter-clockwise about its normal.
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
+            let (u, v) = (n.any_orthonormal_vector(), n.cross(n.any_orthonormal_vector()));
+            let c = Vec3::new(0.0, 1.0, 0.0) + 0.5 * n;
+            let corners = [
+                c - 0.5 * u - 0.5 * v,
+                c + 0.5 * u - 0.5 * v,
+                c + 0.5 * u + 0.5 * v,
+                c - 0.5 * u + 0.5 * v,
+            ];
+            quads.push((corners, n, 1));
+        }
+    }
+    for (corners, n, material) in quads {
+        scene
+            .push_mesh(MeshData {
+                positions: &corners,
+                normals: &[n; 4],
+                uvs: &[],
+                indices: &[0, 1, 2, 0, 2, 3],
+                material,
+                ..MeshData::default()
+            })
+            .unwrap();
+    }
+    scene.lights.push(deep_gbuffer::scene::Light {
+        name: "sun".into(),
+        kind: deep_gbuffer::scene::LightKind::Directional {
+            direction: Vec3::new(0.0, -2.0, 1.0).normalize(),
+        },
+        color: Vec3::ONE,
+        intensity: 3.0,
+        casts_shadows: true,
+    });
+    scene.ambient = Vec3::new(0.0, 0.0, 0.5);
+    scene
+}
+
+/// The mirror shows the box's face that the camera does not see, lit by the sun, where the
+/// mirrored view rays meet it (worked out in closed form): the screen holds no such face, the
+/// sun's shadow map does. Screen-only reflections show the sky there. And the GPU agrees with
+/// the CPU reference.
+#[test]
+fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
+    let scene = a_box_before_a_mirror();
+    let camera =
+        Camera::perspective(Vec3::new(2.5, 2.5, 4.0), Vec3::new(0.0, 1.0, -1.0), 45.0, 0.1);
+    let size = Settings::with_size(96, 72);
+    let followed = render(&scene, &camera, Settings { timings: false, ..size.clone() });
+    let mut screen_only = Settings { timings: false, ..size };
+    screen_only.reflections.shadow_maps = false;
+    let unfollowed = render(&scene, &camera, screen_only);
+    let g = gpu();
+    let layer0 = followed.renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+    let centre = (36 * 96 + 48) as usize;
+    assert_eq!(layer0[centre].material, 1, "the camera sees the box");
+    let [with, without] = [&followed, &unfollowed]
+        .map(|r| read4(&r.renderer, r.renderer.reflections_buffer().unwrap()));
+    // The back face's radiance: Lambertian (roughness 1, no metal), lit at n.l = 1/sqrt(5)
+    // with irradiance 3, no ambient term reaches it (its obscurance is 1, the ambient 0.5 blue
+    // only): base / pi * 3 / sqrt(5), the blue channel plus the ambient's share.
+    let lit = Vec3::new(0.8, 0.5, 0.2) / std::f32::consts::PI * 3.0 / 5f32.sqrt();
+    let inv_view = camera.view().inverse();
+    let layer1 = followed.renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap().samples;
+    let cpu = march_matches(&followed.renderer, &followed.frame, [&layer0, &layer1], &scene, "box");
+    let (mut shown, mut counted) = (0, 0);
+    for (p, s) in layer0.iter().enumerate() {
+        if !(s.depth > 0.0 && s.material == 0) {
+            continue;
+        }
+        let (x, y) = ((p % 96) as f32 + 0.5, (p / 96) as f32 + 0.5);
+        let vp = deep_gbuffer::cpu::frame::view_position(
+            &followed.frame,
+            glam::Vec2::new(x, y),
+            s.depth,
+        );
+        let point = inv_view.transform_point3(vp);
+        let d = (point - camera.eye).normalize();
+        let m = Vec3::new(d.x, d.y, -d.z);
+        // Where the mirrored ray meets the plane of the back face, z = -0.5, well inside it.
+        let t = (-0.5 - point.z) / m.z;
+        let q = point + m * t;
+        if !(t > 0.0 && q.x.abs() < 0.35 && (q.y - 1.0).abs() < 0.35) {
+            continue;
+        }
+        counted += 1;
+        // The GPU and the CPU reference alike.
+        let near =
+            |v: Vec4| (v.x - lit.x).abs() < 0.15 * lit.x && (v.y - lit.y).abs() < 0.15 * lit.y;
+        if near(with[p]) && near(cpu[p]) {
+            shown += 1;
+        }
+        assert!(
+            without[p].truncate().distance(Vec3::new(0.0, 0.0, 0.5)) < 1e-3,
+            "screen-only: the sky at {p}, {:?}",
+            without[p]
+        );
+    }
+    assert!(counted > 20, "mirrored rays meet the hidden face ({counted})");
+    assert!(shown * 10 >= counted * 9, "{shown} of {counted} mirror pixels show the lit face");
 }

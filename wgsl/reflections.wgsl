@@ -23,8 +23,22 @@
 //   gives the mapping) when one is set, else the constant sky. Hits fade out near the screen
 //   edges; the confidence (alpha) is 1 for a hit far from the edges, 0 for the environment.
 //   Output: reflectivity * colour.
+// reflections_hidden (FOLLOW): one thread per pixel. A reflective pixel none of whose rays
+//   the screen placed (confidence 0) follows them through the lights' shadow maps instead: what
+//   a light sees first is a surface too, lit by it, and often one neither layer holds (the side
+//   of a sphere turned from the camera, towards the sun). The mirror ray, within the scene's
+//   bounding sphere and `max_distance`, takes HIDDEN_STEPS even steps; where a step passes
+//   behind the surface a shadow map holds at its texel (where it was in front at the step
+//   before), HIDDEN_REFINE bisections find the crossing and the ray is intersected exactly
+//   with the triangles the map holds on either side of it (a ray that only enters a shadow
+//   meets neither). The nearest such hit over the lights is shaded from its triangle
+//   (shared/surface.wgsl: normal, material, textures), lit towards the point the ray left
+//   (shared/lit.wgsl), with the ambient term and no obscurance or gathered light (the screen
+//   holds none there). A glossy lobe's directions travel as far as the mirror ray did, as in
+//   the march, and see the triangle a map holds within the tolerance there, else what the
+//   mirror ray saw. Pixels where nothing is found keep the environment. Confidence 1.
 // src/cpu/reflections.rs is the same on the CPU.
-// defines: PACKED AO RADIOSITY SHADOWS
+// defines: PACKED AO RADIOSITY SHADOWS FOLLOW (with SHADOWS: reflections_hidden)
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -33,6 +47,8 @@
 #include "shared/lit.wgsl"
 #include "shared/indirect.wgsl"
 
+// A march's outcome where it ran into the side of a solid the camera does not see.
+const HIDDEN_SIDE: u32 = 3u;
 // Most cells one ray visits (each a pyramid read, or at level 0 a pixel's test).
 const ITERATIONS: u32 = 64u;
 const EDGE_FADE: f32 = 0.1;
@@ -67,6 +83,9 @@ struct Reflections {
     pcf: u32,
     _pad0: u32,
     _pad1: u32,
+    // The scene's bounding sphere (world centre, radius; 0: rays are not followed through the
+    // shadow maps).
+    bounds: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -90,6 +109,27 @@ struct Reflections {
 #endif
 #if RADIOSITY
 @group(0) @binding(12) var<storage, read> irradiance: array<vec4<f32>>;
+#endif
+#if SHADOWS
+#if FOLLOW
+// The scene, for the surfaces the shadow maps hold (shared/surface.wgsl).
+@group(0) @binding(15) var<storage, read> positions: array<f32>;
+@group(0) @binding(16) var<storage, read> normals: array<f32>;
+@group(0) @binding(17) var<storage, read> uvs: array<f32>;
+@group(0) @binding(18) var<storage, read> indices: array<u32>;
+@group(0) @binding(19) var<storage, read> tri_materials: array<u32>;
+@group(0) @binding(20) var<storage, read> materials: array<Material>;
+@group(0) @binding(21) var<storage, read> texels: array<u32>;
+@group(0) @binding(22) var<storage, read> uvs1: array<f32>;
+@group(0) @binding(23) var<storage, read> tangents: array<f32>;
+// The rays reflections_hidden follows: [0] their count, then (pixel, how far: `follow` in the
+// march) per ray.
+@group(0) @binding(24) var<storage, read_write> followed: array<atomic<u32>>;
+// reflections_hidden's indirect dispatch arguments.
+@group(0) @binding(25) var<storage, read_write> hidden_args: array<u32>;
+#include "shared/surface.wgsl"
+#include "shared/barycentric.wgsl"
+#endif
 #endif
 
 const TAU_R: f32 = 6.28318531;
@@ -197,17 +237,18 @@ fn nearest_at(level: u32, cell: vec2<u32>) -> f32 {
     return nearest[offset + cell.y * params.widths[level / 4u][level % 4u] + cell.x];
 }
 
-// The layer (0 or 1) pixel q shows where the ray r's segment across it, from xy_in at depth
-// z_in to xy_out at depth z_out, meets it from the front (a surface whose normal faces along
-// the ray is one the ray would reach from inside its solid); 2: neither.
+// What the ray r's segment across pixel q, from xy_in at depth z_in to xy_out at depth z_out,
+// meets there: the layer (0 or 1) it meets from the front; 2: neither; HIDDEN_SIDE: layer 0's
+// shell from behind (its surface faces along the ray): the ray runs into the side of that solid
+// the camera does not see, which no layer holds, and stops there.
 fn layer_hit(q: u32, r: vec3<f32>, xy_in: vec2<f32>, z_in: f32, xy_out: vec2<f32>, z_out: f32) -> u32 {
     let s = sample_at(q);
     if s.depth > 0.0 {
         let n = mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz;
         let g_in = z_in - plane_depth(s, n, q, xy_in);
         let g_out = z_out - plane_depth(s, n, q, xy_out);
-        if max(g_in, g_out) >= 0.0 && min(g_in, g_out) <= params.thickness && dot(n, r) < 0.0 {
-            return 0u;
+        if max(g_in, g_out) >= 0.0 && min(g_in, g_out) <= params.thickness {
+            return select(HIDDEN_SIDE, 0u, dot(n, r) < 0.0);
         }
     }
     if params.two_layers == 0u {
@@ -314,7 +355,7 @@ fn march(pixel: vec2<u32>, depth: f32, p: vec3<f32>, r: vec3<f32>) -> Hit {
         }
         let q = cell.y * frame.width + cell.x;
         let layer = layer_hit(q, r, xy, z_in, a + d * t_out, z_out);
-        if layer < 2u {
+        if layer != 2u {
             return Hit(q, layer, xy);
         }
         t = t_out + nudge;
@@ -346,7 +387,7 @@ fn layer_depth(q: u32, layer: u32) -> f32 {
 
 // A unit vector's orthonormal tangents (Duff et al. 2017, "Building an orthonormal basis,
 // revisited").
-fn tangents(n: vec3<f32>) -> mat2x3<f32> {
+fn lobe_frame(n: vec3<f32>) -> mat2x3<f32> {
     let sign = select(-1.0, 1.0, n.z >= 0.0);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
@@ -358,7 +399,7 @@ fn tangents(n: vec3<f32>) -> mat2x3<f32> {
 // distribution of visible normals"); a direction below the surface is mirrored above it.
 // src/cpu/reflections.rs (`lobe_direction`) is the same on the CPU.
 fn lobe_direction(n: vec3<f32>, wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
-    let tb = tangents(n);
+    let tb = lobe_frame(n);
     let ve = normalize(vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), max(dot(wo, n), 1e-4)));
     let vh = normalize(vec3<f32>(alpha * ve.x, alpha * ve.y, ve.z));
     let lensq = vh.x * vh.x + vh.y * vh.y;
@@ -377,6 +418,25 @@ fn lobe_direction(n: vec3<f32>, wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3
     var l = 2.0 * dot(ve, m) * m - ve;
     l.z = abs(l.z);
     return normalize(l.x * tb[0] + l.y * tb[1] + l.z * n);
+}
+
+// Whether layer 0 at pixel q borders a surface much farther or nearer (a depth step of more
+// than the reflections' thickness to a pixel beside it, or none there).
+fn silhouette(q: u32) -> bool {
+    let x = i32(q % frame.width);
+    let y = i32(q / frame.width);
+    let z = layer_depth(q, 0u);
+    for (var k = 0u; k < 4u; k++) {
+        let o = select(select(vec2<i32>(0, -1), vec2<i32>(0, 1), k == 2u), select(vec2<i32>(-1, 0), vec2<i32>(1, 0), k == 0u), k < 2u);
+        let t = vec2<i32>(x, y) + o;
+        if all(t >= vec2<i32>(0)) && t.x < i32(frame.width) && t.y < i32(frame.height) {
+            let zt = layer_depth(u32(t.y) * frame.width + u32(t.x), 0u);
+            if !(zt > 0.0) || abs(zt - z) > params.thickness {
+                return true;
+            }
+        }
+    }
+    return false;
 }
 
 fn trace(pixel: vec2<u32>) -> vec4<f32> {
@@ -399,6 +459,34 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
         mirror_trust = edge_confidence(hit.xy);
         mirror = mix(mirror, seen_at(hit.q, hit.layer, r), mirror_trust);
     }
+    // How far the mirror ray went on screen, to what it hit (its reach for the lobe below).
+    var went = 0.0;
+    if hit.layer != 2u {
+        let centre = vec2<f32>(f32(hit.q % frame.width), f32(hit.q / frame.width)) + 0.5;
+        went = length(view_position(frame, centre, layer_depth(hit.q, min(hit.layer, 1u))) - p);
+    }
+#if SHADOWS
+#if FOLLOW
+    // How far reflections_hidden follows the ray through the shadow maps: not at all past an
+    // ordinary hit (0); to the scene's edge where it found nothing (+inf) and to the side it ran
+    // into (+went), taking what it meets there; to a silhouette it hit (-went), taking what it
+    // meets there only where the camera does not see it (the ray may have passed the
+    // silhouette's pixel onto the side behind it).
+    var follow = 0.0;
+    if hit.layer == 2u {
+        follow = 3.4e38;
+    } else if hit.layer == HIDDEN_SIDE {
+        follow = went;
+    } else if hit.layer == 0u && silhouette(hit.q) {
+        follow = -went;
+    }
+    if follow != 0.0 {
+        let slot = atomicAdd(&followed[0], 1u);
+        atomicStore(&followed[1u + 2u * slot], pixel.y * frame.width + pixel.x);
+        atomicStore(&followed[2u + 2u * slot], bitcast<u32>(follow));
+    }
+#endif
+#endif
     let alpha = s.roughness * s.roughness;
     if !(alpha > 0.0) || params.lobe_samples <= 1u {
         return vec4<f32>(s.reflectivity * mirror, mirror_trust);
@@ -407,11 +495,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     // mirror ray did, and sees the surface the screen holds there when a layer's depth lies
     // within the thickness plus a quarter of that distance of it; otherwise it sees what the
     // mirror ray saw. When the mirror ray found nothing, each direction sees the environment.
-    var reach = -1.0;
-    if hit.layer < 2u {
-        let centre = vec2<f32>(f32(hit.q % frame.width), f32(hit.q / frame.width)) + 0.5;
-        reach = length(view_position(frame, centre, layer_depth(hit.q, hit.layer)) - p);
-    }
+    let reach = select(-1.0, went, hit.layer < 2u);
     // The lobe widens with the roughness: all its directions from roughness 0.5 up, fewer
     // (at least two) in proportion below.
     let k = clamp(u32(ceil(f32(params.lobe_samples) * min(2.0 * s.roughness, 1.0))), 2u, params.lobe_samples);
@@ -467,3 +551,233 @@ fn reflections_march(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoc
     }
     reflections[pixel.y * frame.width + pixel.x] = trace(pixel);
 }
+
+#if SHADOWS
+#if FOLLOW
+// Even steps of a ray through the shadow maps, and bisections of the step where it passes
+// behind a surface.
+const HIDDEN_STEPS: u32 = 16u;
+const HIDDEN_REFINE: u32 = 6u;
+// How far outside a triangle (in barycentric coordinates) an exact hit may fall: the crossing
+// lies on a texel's triangle up to the map's rounding.
+const HIDDEN_SLACK: f32 = 1e-4;
+
+// Light i's shadow map at world point p: `gap`, how far (along the face's view) the surface the
+// map holds at p's texel lies behind p (> 0: p lies in front of it, towards the light), and that
+// surface's triangle; `ok` is false off the map or where the light sees nothing.
+struct MapPoint {
+    gap: f32,
+    id: u32,
+    ok: bool,
+}
+
+fn map_point(i: u32, p: vec3<f32>) -> MapPoint {
+    var out = MapPoint(0.0, 0u, false);
+    let info = light_faces[i];
+    let f = faces[info.x + shadow_face_index(info.y, p - lights[i].position)];
+    let v = mat_mul(f.view, vec4<f32>(p, 1.0));
+    let c = mat_mul(f.proj, v);
+    if !(c.w > 0.0) {
+        return out;
+    }
+    let res = f32(f.resolution);
+    let uv = clip_to_pixel(c, vec2<f32>(res));
+    if !(all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(res))) {
+        return out;
+    }
+    let t = vec2<u32>(uv);
+    let word = atlas[f.offset + t.y * f.resolution + t.x];
+    if word.y == 0xffffffffu {
+        return out;
+    }
+    return MapPoint(bitcast<f32>(word.y) + v.z, word.x, true);
+}
+
+// Where a world-space ray meets the surface of a triangle: its parameter (-1: none), the
+// triangle and the barycentrics there.
+struct HiddenHit {
+    t: f32,
+    id: u32,
+    bary: vec3<f32>,
+}
+
+fn triangle_vertices(id: u32) -> vec3<u32> {
+    return vec3<u32>(indices[3u * id], indices[3u * id + 1u], indices[3u * id + 2u]);
+}
+
+// Where the ray o + t d meets triangle `id` for t in (t_min, t_max], if it does.
+fn triangle_hit(id: u32, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> HiddenHit {
+    var out = HiddenHit(-1.0, id, vec3<f32>(0.0));
+    if id >= frame.triangle_count {
+        return out;
+    }
+    let tri = triangle_vertices(id);
+    let h = ray_triangle(o, d, load3(0u, tri.x), load3(0u, tri.y), load3(0u, tri.z), HIDDEN_SLACK);
+    if h.x > t_min && h.x <= t_max {
+        out.t = h.x;
+        out.bary = h.yzw;
+    }
+    return out;
+}
+
+// The parameter where the ray from world point o along unit d leaves the scene's bounding sphere
+// (within `max_distance`); 0 without bounds.
+fn scene_exit(o: vec3<f32>, d: vec3<f32>) -> f32 {
+    let r = params.bounds.w;
+    if !(r > 0.0) {
+        return 0.0;
+    }
+    let m = o - params.bounds.xyz;
+    let b = dot(m, d);
+    let c = dot(m, m) - r * r;
+    let t = -b + sqrt(max(b * b - c, 0.0));
+    return clamp(t, 0.0, params.max_distance);
+}
+
+// The first surface that a light's shadow map holds and the ray from world point o along unit d
+// meets within t_end (the nearest over the lights).
+fn hidden_hit(o: vec3<f32>, d: vec3<f32>, t_end: f32) -> HiddenHit {
+    var best = HiddenHit(-1.0, 0u, vec3<f32>(0.0));
+    var reach = t_end;
+    // Past the point's own surface.
+    let t_min = 1e-4 * params.bounds.w;
+    for (var i = 0u; i < params.light_count; i++) {
+        if light_faces[i].y == 0u {
+            continue;
+        }
+        var t0 = 0.0;
+        var front = true;
+        for (var k = 1u; k <= HIDDEN_STEPS; k++) {
+            let t1 = t_end * f32(k) / f32(HIDDEN_STEPS);
+            if t0 >= reach {
+                break;
+            }
+            let m = map_point(i, o + d * t1);
+            let behind = m.ok && m.gap < 0.0;
+            if behind && front {
+                // The ray passed behind the map's surface between t0 and t1: where, and the
+                // triangles held on either side of that point.
+                var lo = t0;
+                var hi = t1;
+                var id_hi = m.id;
+                var id_lo = m.id;
+                for (var b = 0u; b < HIDDEN_REFINE; b++) {
+                    let mid = 0.5 * (lo + hi);
+                    let mm = map_point(i, o + d * mid);
+                    if mm.ok && mm.gap < 0.0 {
+                        hi = mid;
+                        id_hi = mm.id;
+                    } else {
+                        lo = mid;
+                        if mm.ok {
+                            id_lo = mm.id;
+                        }
+                    }
+                }
+                var h = triangle_hit(id_hi, o, d, t_min, reach);
+                if h.t < 0.0 && id_lo != id_hi {
+                    h = triangle_hit(id_lo, o, d, t_min, reach);
+                }
+                if h.t > 0.0 {
+                    best = h;
+                    reach = h.t;
+                    break;
+                }
+            }
+            front = !behind;
+            t0 = t1;
+        }
+    }
+    return best;
+}
+
+// Whether the camera sees the side of hit h's triangle (at world point x) that the ray from o
+// meets, where a layer could hold it: the screen's own hit then stands.
+fn faces_camera(h: HiddenHit, x: vec3<f32>, o: vec3<f32>) -> bool {
+    let tri = triangle_vertices(h.id);
+    let w0 = load3(0u, tri.x);
+    let geo = cross(load3(0u, tri.y) - w0, load3(0u, tri.z) - w0);
+    var to_camera = mat_mul(frame.inv_view, vec4<f32>(0.0, 0.0, 0.0, 1.0)).xyz - x;
+    if frame.ortho != 0u {
+        to_camera = mat_mul(frame.inv_view, vec4<f32>(0.0, 0.0, 1.0, 0.0)).xyz;
+    }
+    return dot(geo, to_camera) * dot(geo, o - x) > 0.0;
+}
+
+// What a ray along unit d sees at hidden hit h: the surface lit towards the ray's origin,
+// its roughness widened by `blur`, the spread (GGX alpha) of the directions the reflecting
+// pixel gathers.
+fn hidden_seen(h: HiddenHit, d: vec3<f32>, blur: f32) -> vec3<f32> {
+    let tri = triangle_vertices(h.id);
+    let w = array<vec3<f32>, 3>(load3(0u, tri.x), load3(0u, tri.y), load3(0u, tri.z));
+    var s = surface_sample(h.id, tri, w, h.bary, -d);
+    // The lobe's spread of directions moves the hit over a curved surface: its normal turns by
+    // the spread times the distance times the curvature (from the vertex normals).
+    var curvature = 0.0;
+    for (var e = 0u; e < 3u; e++) {
+        let ni = load3(1u, tri[e]);
+        let nj = load3(1u, tri[(e + 1u) % 3u]);
+        let len = length(w[(e + 1u) % 3u] - w[e]);
+        if len > 0.0 && dot(ni, ni) > 0.0 && dot(nj, nj) > 0.0 {
+            curvature = max(curvature, length(normalize(nj) - normalize(ni)) / len);
+        }
+    }
+    let widened = blur * (1.0 + h.t * min(curvature, 1e6));
+    let a = s.roughness * s.roughness;
+    s.roughness = sqrt(sqrt(a * a + widened * widened));
+    let world = w[0] * h.bary.x + w[1] * h.bary.y + w[2] * h.bary.z;
+    return shaded(s, lit(s, world, -d, params.light_count, params.pcf).radiance, 1.0, vec4<f32>(0.0), params.ambient);
+}
+
+@compute @workgroup_size(1)
+fn reflections_hidden_args() {
+    let size = indirect_size((atomicLoad(&followed[0]) + 63u) / 64u);
+    hidden_args[0] = size.x;
+    hidden_args[1] = size.y;
+    hidden_args[2] = size.z;
+}
+
+@compute @workgroup_size(64)
+fn reflections_hidden(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let entry = indirect_group(wid) * 64u + lid;
+    if entry >= atomicLoad(&followed[0]) {
+        return;
+    }
+    let q = atomicLoad(&followed[1u + 2u * entry]);
+    let follow = bitcast<f32>(atomicLoad(&followed[2u + 2u * entry]));
+    let s = sample_at(q);
+    let gid = vec2<u32>(q % frame.width, q / frame.width);
+    let p = view_position(frame, vec2<f32>(gid) + 0.5, s.depth);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
+    var v = normalize(p);
+    if frame.ortho != 0u {
+        v = vec3<f32>(0.0, 0.0, -1.0);
+    }
+    let o = mat_mul(frame.inv_view, vec4<f32>(p, 1.0)).xyz;
+    let r = normalize(mat_mul(frame.inv_view, vec4<f32>(reflect(v, n), 0.0)).xyz);
+    let reach = min(scene_exit(o, r), 1.25 * abs(follow) + params.thickness);
+    let hit = hidden_hit(o, r, reach);
+    if hit.t < 0.0 || (follow < 0.0 && faces_camera(hit, o + r * hit.t, o)) {
+        return;
+    }
+    // The pixel's own spread of normals (its footprint on a curved surface): a quarter of the
+    // change of the normal across the two pixels either side, per axis.
+    var spread = 0.0;
+    for (var axis = 0u; axis < 2u; axis++) {
+        let step = select(vec2<i32>(0, 1), vec2<i32>(1, 0), axis == 0u);
+        let a0 = vec2<i32>(gid) - step;
+        let a1 = vec2<i32>(gid) + step;
+        if all(a0 >= vec2<i32>(0)) && a1.x < i32(frame.width) && a1.y < i32(frame.height) {
+            let s0 = sample_at(u32(a0.y) * frame.width + u32(a0.x));
+            let s1 = sample_at(u32(a1.y) * frame.width + u32(a1.x));
+            if s0.depth > 0.0 && s1.depth > 0.0 && abs(s0.depth - s1.depth) < 0.1 * s.depth {
+                let dn = 0.25 * length(s1.normal - s0.normal);
+                spread += dn * dn;
+            }
+        }
+    }
+    let alpha = s.roughness * s.roughness;
+    reflections[q] = vec4<f32>(s.reflectivity * hidden_seen(hit, r, sqrt(alpha * alpha + 2.0 * spread)), 1.0);
+}
+#endif
+#endif

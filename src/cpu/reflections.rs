@@ -1,4 +1,5 @@
-//! CPU reference of `wgsl/reflections.wgsl`: the two-layer hierarchical screen-space march.
+//! CPU reference of `wgsl/reflections.wgsl`: the two-layer hierarchical screen-space march, and
+//! the rays it cannot place followed through the lights' shadow maps.
 
 use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
@@ -6,11 +7,12 @@ use crate::cpu::composite::shaded;
 use crate::cpu::direct::lit;
 use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, screen_exit, view_position};
 use crate::cpu::pyramid::nearest;
-use crate::cpu::shadow::Shadows;
+use crate::cpu::resolve::{ray_triangle, surface_sample};
+use crate::cpu::shadow::{Shadows, shadow_face_index};
 use crate::environment::Environment;
 use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform};
 use crate::gbuffer::GSample;
-use crate::scene::GpuLight;
+use crate::scene::{GpuLight, Scene};
 
 /// Most cells one ray visits.
 const ITERATIONS: u32 = 64;
@@ -19,6 +21,12 @@ const EDGE_FADE: f32 = 0.1;
 const UNBOUNDED: f32 = 1000.0;
 /// The ray stops this much in front of the near plane (relative).
 const NEAR_MARGIN: f32 = 1.001;
+/// `HIDDEN_SIDE`: the march ran into the side of a solid the camera does not see.
+const HIDDEN_SIDE: u32 = 3;
+/// Steps and bisections of a ray through the shadow maps, and the slack of its exact hit.
+const HIDDEN_STEPS: u32 = 16;
+const HIDDEN_REFINE: u32 = 6;
+const HIDDEN_SLACK: f32 = 1e-4;
 
 /// The screen position (pixels) of view-space point q in front of the camera.
 fn project(f: &FrameUniform, q: Vec3) -> Vec2 {
@@ -73,7 +81,7 @@ struct March<'a> {
 
 impl March<'_> {
     /// As `layer_hit`: the layer pixel q shows where the ray r's segment across it meets it
-    /// from the front.
+    /// from the front, or [`HIDDEN_SIDE`] where it meets layer 0's shell from behind.
     #[allow(clippy::too_many_arguments)]
     fn layer_hit(
         &self,
@@ -90,8 +98,8 @@ impl March<'_> {
             let n = view_normal(f, s);
             let g_in = z_in - plane_depth(f, s, n, q, xy_in);
             let g_out = z_out - plane_depth(f, s, n, q, xy_out);
-            if g_in.max(g_out) >= 0.0 && g_in.min(g_out) <= thickness && n.dot(r) < 0.0 {
-                return Some(0);
+            if g_in.max(g_out) >= 0.0 && g_in.min(g_out) <= thickness {
+                return Some(if n.dot(r) < 0.0 { 0 } else { HIDDEN_SIDE });
             }
         }
         let s1 = &self.layer1?[q];
@@ -101,6 +109,23 @@ impl March<'_> {
             && z_in.min(z_out) - s1.depth <= thickness
             && n1.dot(r) < 0.0)
             .then_some(1)
+    }
+
+    /// As `silhouette`: whether layer 0 at pixel q borders a pixel more than the thickness
+    /// nearer or farther, or an empty one.
+    fn silhouette(&self, q: usize) -> bool {
+        let f = self.f;
+        let (x, y) = ((q as u32 % f.width) as i32, (q as u32 / f.width) as i32);
+        let depth = |s: &GSample| if s.depth > 0.0 { s.depth } else { 0.0 };
+        let z = depth(&self.layer0[q]);
+        [(1, 0), (-1, 0), (0, 1), (0, -1)].into_iter().any(|(dx, dy)| {
+            let (tx, ty) = (x + dx, y + dy);
+            if tx < 0 || ty < 0 || tx >= f.width as i32 || ty >= f.height as i32 {
+                return false;
+            }
+            let zt = depth(&self.layer0[(ty as u32 * f.width + tx as u32) as usize]);
+            zt.is_nan() || zt <= 0.0 || (zt - z).abs() > self.u.thickness
+        })
     }
 
     /// As `trace`: the pixel where pixel (x, y)'s mirrored ray hits, its layer and the
@@ -171,6 +196,9 @@ pub struct HitShading<'a> {
     pub av: Option<&'a [f32]>,
     /// The gathered irradiance and coverage, when radiosity runs.
     pub irradiance: Option<&'a [Vec4]>,
+    /// The scene, when the rays the screen cannot place are followed through `shadows`
+    /// ([`ReflectionSettings::shadow_maps`](crate::ReflectionSettings::shadow_maps)).
+    pub follow: Option<&'a Scene>,
 }
 
 impl HitShading<'_> {
@@ -268,6 +296,7 @@ pub fn reflections(
         if s.depth > 0.0 { s.depth } else { 0.0 }
     };
     let mut out = vec![Vec4::ZERO; (f.width * f.height) as usize];
+    let mut followed = Vec::new();
     for y in 0..f.height {
         for x in 0..f.width {
             let pi = (y * f.width + x) as usize;
@@ -285,6 +314,21 @@ pub fn reflections(
             let r = v - 2.0 * n.dot(v) * n;
             let hit = march.trace(UVec2::new(x, y), s, r);
             let (mut mirror, mut mirror_trust) = (sky(r), 0.0);
+            // As the kernel's `went` and `follow`.
+            let went = hit.map_or(0.0, |(q, layer, _)| {
+                let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32);
+                (view_position(f, centre + 0.5, layer_depth(q, layer.min(1))) - p).length()
+            });
+            let follow = match hit {
+                None => 3.4e38,
+                Some((_, HIDDEN_SIDE, _)) => went,
+                Some((q, 0, _)) if march.silhouette(q) => -went,
+                Some(_) => 0.0,
+            };
+            if follow != 0.0 {
+                followed.push((pi, follow));
+            }
+            let hit = hit.filter(|&(_, layer, _)| layer < 2);
             if let Some((q, layer, xy)) = hit {
                 mirror_trust = edge_confidence(xy);
                 mirror = mirror.lerp(shading.seen(f, layers, (q, layer), r, ambient), mirror_trust);
@@ -295,10 +339,7 @@ pub fn reflections(
                 continue;
             }
             // As the kernel: lobe directions travel as far as the mirror ray did.
-            let reach = hit.map(|(q, layer, _)| {
-                let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32);
-                (view_position(f, centre + 0.5, layer_depth(q, layer)) - p).length()
-            });
+            let reach = hit.map(|_| went);
             let share = (2.0 * s.roughness).min(1.0);
             let k = ((u.lobe_samples as f32 * share).ceil() as u32).clamp(2, u.lobe_samples);
             let (mut sum, mut trust) = (Vec3::ZERO, 0.0);
@@ -338,5 +379,205 @@ pub fn reflections(
             out[pi] = (s.reflectivity * sum / k as f32).extend(trust / k as f32);
         }
     }
+    if let (Some(scene), Some(shadows)) = (shading.follow, shading.shadows) {
+        let hidden = Hidden { f, u, scene, lights: shading.lights, shadows };
+        for (pi, follow) in followed {
+            if let Some(v) = hidden.reflected(layer0, pi, follow) {
+                out[pi] = v;
+            }
+        }
+    }
     out
+}
+
+/// As `reflections_hidden`: what the lights' shadow maps hold, for the rays the march could not
+/// place.
+struct Hidden<'a> {
+    f: &'a FrameUniform,
+    u: &'a ReflectionsUniform,
+    scene: &'a Scene,
+    lights: &'a [GpuLight],
+    shadows: &'a Shadows<'a>,
+}
+
+impl Hidden<'_> {
+    /// As `map_point`: how far the surface light i's map holds at p's texel lies behind p, and
+    /// its triangle.
+    fn map_point(&self, i: usize, p: Vec3) -> Option<(f32, u32)> {
+        let sh = self.shadows;
+        let [first, count] = sh.light_faces.get(i).copied().unwrap_or([0, 0]);
+        let light = Vec3::from(self.lights[i].position);
+        let face = &sh.faces[(first + shadow_face_index(count, p - light)) as usize];
+        let v = mat_mul(&face.view, p.extend(1.0).to_array());
+        let c = mat_mul(&face.proj, v.to_array());
+        if c.w.is_nan() || c.w <= 0.0 {
+            return None;
+        }
+        let res = face.resolution as f32;
+        let uv = clip_to_pixel(c, Vec2::splat(res));
+        if !(uv.x >= 0.0 && uv.y >= 0.0 && uv.x < res && uv.y < res) {
+            return None;
+        }
+        let t = uv.as_uvec2();
+        let word = sh.atlas[(face.offset + t.y * face.resolution + t.x) as usize];
+        let depth = (word >> 32) as u32;
+        (depth != u32::MAX).then(|| (f32::from_bits(depth) + v.z, word as u32))
+    }
+
+    fn corners(&self, id: u32) -> [usize; 3] {
+        self.scene.triangles[id as usize].map(|i| i as usize)
+    }
+
+    /// As `triangle_hit`: where the ray o + t d meets triangle `id` for t in (t_min, t_max].
+    fn triangle_hit(
+        &self,
+        id: u32,
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, u32, Vec3)> {
+        if id as usize >= self.scene.triangles.len() {
+            return None;
+        }
+        let w = self.corners(id).map(|i| self.scene.positions[i]);
+        let (t, bary) = ray_triangle(o, d, w, HIDDEN_SLACK)?;
+        (t > t_min && t <= t_max).then_some((t, id, bary))
+    }
+
+    /// As `scene_exit`.
+    fn scene_exit(&self, o: Vec3, d: Vec3) -> f32 {
+        let [cx, cy, cz, r] = self.u.bounds;
+        if r.is_nan() || r <= 0.0 {
+            return 0.0;
+        }
+        let m = o - Vec3::new(cx, cy, cz);
+        let b = m.dot(d);
+        let c = m.dot(m) - r * r;
+        (-b + (b * b - c).max(0.0).sqrt()).clamp(0.0, self.u.max_distance)
+    }
+
+    /// As `hidden_hit`: the first surface a light's shadow map holds that the ray from o along
+    /// unit d meets within t_end.
+    fn hidden_hit(&self, o: Vec3, d: Vec3, t_end: f32) -> Option<(f32, u32, Vec3)> {
+        let mut best = None;
+        let mut reach = t_end;
+        let t_min = 1e-4 * self.u.bounds[3];
+        for i in 0..self.lights.len() {
+            if self.shadows.light_faces.get(i).is_none_or(|lf| lf[1] == 0) {
+                continue;
+            }
+            let (mut t0, mut front) = (0.0f32, true);
+            for k in 1..=HIDDEN_STEPS {
+                let t1 = t_end * k as f32 / HIDDEN_STEPS as f32;
+                if t0 >= reach {
+                    break;
+                }
+                let m = self.map_point(i, o + d * t1);
+                let behind = m.is_some_and(|(gap, _)| gap < 0.0);
+                if behind && front {
+                    let (mut lo, mut hi) = (t0, t1);
+                    let id = m.map_or(0, |(_, id)| id);
+                    let (mut id_hi, mut id_lo) = (id, id);
+                    for _ in 0..HIDDEN_REFINE {
+                        let mid = 0.5 * (lo + hi);
+                        match self.map_point(i, o + d * mid) {
+                            Some((gap, id)) if gap < 0.0 => {
+                                hi = mid;
+                                id_hi = id;
+                            }
+                            other => {
+                                lo = mid;
+                                if let Some((_, id)) = other {
+                                    id_lo = id;
+                                }
+                            }
+                        }
+                    }
+                    let mut h = self.triangle_hit(id_hi, o, d, t_min, reach);
+                    if h.is_none() && id_lo != id_hi {
+                        h = self.triangle_hit(id_lo, o, d, t_min, reach);
+                    }
+                    if let Some(found) = h {
+                        best = Some(found);
+                        reach = found.0;
+                        break;
+                    }
+                }
+                front = !behind;
+                t0 = t1;
+            }
+        }
+        best
+    }
+
+    /// As `faces_camera`.
+    fn faces_camera(&self, id: u32, x: Vec3, o: Vec3) -> bool {
+        let f = self.f;
+        let [w0, w1, w2] = self.corners(id).map(|i| self.scene.positions[i]);
+        let geo = (w1 - w0).cross(w2 - w0);
+        let to_camera = if f.ortho != 0 {
+            mat_mul(&f.inv_view, [0.0, 0.0, 1.0, 0.0]).xyz()
+        } else {
+            mat_mul(&f.inv_view, [0.0, 0.0, 0.0, 1.0]).xyz() - x
+        };
+        geo.dot(to_camera) * geo.dot(o - x) > 0.0
+    }
+
+    /// As `hidden_seen`: the hit surface lit towards o, its roughness widened by `blur`.
+    fn seen(&self, (t, id, bary): (f32, u32, Vec3), d: Vec3, blur: f32) -> Vec3 {
+        let scene = self.scene;
+        let tri = self.corners(id);
+        let w = tri.map(|i| scene.positions[i]);
+        let mut s = surface_sample(scene, id, tri, bary, -d);
+        let mut curvature = 0.0f32;
+        for e in 0..3 {
+            let (i, j) = (tri[e], tri[(e + 1) % 3]);
+            let len = (w[(e + 1) % 3] - w[e]).length();
+            let (ni, nj) = (scene.normals[i], scene.normals[j]);
+            if len > 0.0 && ni.dot(ni) > 0.0 && nj.dot(nj) > 0.0 {
+                curvature = curvature.max((nj.normalize() - ni.normalize()).length() / len);
+            }
+        }
+        let widened = blur * (1.0 + t * curvature.min(1e6));
+        let a = s.roughness * s.roughness;
+        s.roughness = (a * a + widened * widened).sqrt().sqrt();
+        let world = w[0] * bary.x + w[1] * bary.y + w[2] * bary.z;
+        let direct = lit(&s, world, -d, self.lights, Some(self.shadows)).0;
+        shaded(&s, direct, 1.0, Vec4::ZERO, Vec3::from(self.u.ambient))
+    }
+
+    /// What pixel `pi`'s ray, followed `follow` far, reflects, if it finds something.
+    fn reflected(&self, layer0: &[GSample], pi: usize, follow: f32) -> Option<Vec4> {
+        let f = self.f;
+        let s = &layer0[pi];
+        let (x, y) = (pi as u32 % f.width, pi as u32 / f.width);
+        let p = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+        let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
+        let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
+        let o = mat_mul(&f.inv_view, p.extend(1.0).to_array()).xyz();
+        let rv = v - 2.0 * n.dot(v) * n;
+        let r = mat_mul(&f.inv_view, rv.extend(0.0).to_array()).xyz().normalize();
+        let reach = self.scene_exit(o, r).min(1.25 * follow.abs() + self.u.thickness);
+        let hit = self.hidden_hit(o, r, reach)?;
+        if follow < 0.0 && self.faces_camera(hit.1, o + r * hit.0, o) {
+            return None;
+        }
+        let mut spread = 0.0f32;
+        for step in [(1i32, 0i32), (0, 1)] {
+            let (x0, y0) = (x as i32 - step.0, y as i32 - step.1);
+            let (x1, y1) = (x as i32 + step.0, y as i32 + step.1);
+            if x0 >= 0 && y0 >= 0 && x1 < f.width as i32 && y1 < f.height as i32 {
+                let s0 = &layer0[(y0 as u32 * f.width + x0 as u32) as usize];
+                let s1 = &layer0[(y1 as u32 * f.width + x1 as u32) as usize];
+                if s0.depth > 0.0 && s1.depth > 0.0 && (s0.depth - s1.depth).abs() < 0.1 * s.depth {
+                    let dn = 0.25 * (s1.normal - s0.normal).length();
+                    spread += dn * dn;
+                }
+            }
+        }
+        let alpha = s.roughness * s.roughness;
+        let blur = (alpha * alpha + 2.0 * spread).sqrt();
+        Some((s.reflectivity * self.seen(hit, r, blur)).extend(1.0))
+    }
 }

@@ -235,6 +235,32 @@ pub(crate) fn ray_barycentrics(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3, c: Vec
     bary
 }
 
+/// As `ray_triangle` in `wgsl/shared/barycentric.wgsl`: where the ray `origin + t dir` meets the
+/// triangle (a, b, c), `(t, barycentrics)`, or `None` outside it by more than `slack`.
+pub(crate) fn ray_triangle(
+    origin: Vec3,
+    dir: Vec3,
+    [a, b, c]: [Vec3; 3],
+    slack: f32,
+) -> Option<(f32, Vec3)> {
+    let (e1, e2) = (b - a, c - a);
+    let pv = dir.cross(e2);
+    let det = e1.dot(pv);
+    if det.is_nan() || det.abs() <= 1e-30 {
+        return None;
+    }
+    let tv = origin - a;
+    let qv = tv.cross(e1);
+    let u = tv.dot(pv) / det;
+    let v = dir.dot(qv) / det;
+    let bary = Vec3::new(1.0 - u - v, u, v);
+    if !bary.cmpge(Vec3::splat(-slack)).all() {
+        return None;
+    }
+    let raw = bary.clamp(Vec3::ZERO, Vec3::ONE);
+    Some((e2.dot(qv) / det, raw / (raw.x + raw.y + raw.z)))
+}
+
 /// As `triangle_opacity`: the opacity of triangle `id` of `scene` where the ray through the
 /// centre of pixel (x, y) meets it at view depth `d` (1 for a triangle without a material).
 pub(crate) fn triangle_opacity(
@@ -288,6 +314,52 @@ pub fn stored_depth(f: &FrameUniform, d: f32) -> f32 {
     d
 }
 
+/// As `surface_sample` in `wgsl/shared/surface.wgsl`: the surface of triangle `id` (vertex
+/// indices `tri`) at barycentrics `bary`, turned to face the unit world direction `to_viewer`:
+/// normal and material terms (no depth, no motion).
+pub(crate) fn surface_sample(
+    scene: &Scene,
+    id: u32,
+    [i0, i1, i2]: [usize; 3],
+    bary: Vec3,
+    to_viewer: Vec3,
+) -> GSample {
+    let (w0, w1, w2) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
+    let mut geo = (w1 - w0).cross(w2 - w0);
+    let gl = geo.length();
+    geo = if gl > 0.0 && gl <= 3e38 { geo / gl } else { to_viewer };
+    let n_interp =
+        scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
+    let nl = n_interp.length();
+    let mut n = if nl > 1e-12 && nl <= 3e38 { n_interp / nl } else { geo };
+    let at = Corners { scene, tri: [i0, i1, i2], bary };
+    let mid = scene.triangle_materials[id as usize];
+    if let Some(m) = scene.materials.get(mid as usize) {
+        n = normal_mapped(m, &at, n);
+    }
+    if geo.dot(to_viewer) < 0.0 {
+        geo = -geo;
+        n = -n;
+    }
+    if n.dot(to_viewer) < 0.0 {
+        n = (n - to_viewer * (n.dot(to_viewer) - 1e-3)).normalize();
+    }
+    if n.dot(n).is_nan() || n.dot(n) <= 0.5 {
+        n = geo;
+    }
+    let mut s = GSample { normal: n, material: mid, ..GSample::default() };
+    if let Some(m) = scene.materials.get(mid as usize) {
+        let v = material_at(m, &at);
+        s.base_color = v.base_color;
+        s.roughness = v.roughness;
+        s.metallic = v.metallic;
+        s.reflectivity = v.reflectivity;
+        s.occlusion = v.occlusion;
+        s.emissive = v.emissive;
+    }
+    s
+}
+
 /// The G-buffer sample of visibility word `word` at pixel (x, y), the geometry taken as still.
 pub fn resolve_pixel(f: &FrameUniform, scene: &Scene, word: u64, x: u32, y: u32) -> GSample {
     resolve_pixel_moved(f, scene, None, word, x, y)
@@ -318,45 +390,14 @@ pub fn resolve_pixel_moved(
     let (origin, dir) = pixel_ray(f, x, y, d);
     let bary = ray_barycentrics(origin, dir, a, b, c);
     let world = w0 * bary.x + w1 * bary.y + w2 * bary.z;
-    let mut geo = (w1 - w0).cross(w2 - w0);
-    let gl = geo.length();
     let eye = mat_mul(&f.inv_view, origin.extend(1.0).to_array()).xyz();
     let to_eye = if f.ortho != 0 {
         mat_mul(&f.inv_view, [0.0, 0.0, 1.0, 0.0]).xyz().normalize()
     } else {
         (eye - world).normalize()
     };
-    geo = if gl > 0.0 && gl <= 3e38 { geo / gl } else { to_eye };
-    let n_interp =
-        scene.normals[i0] * bary.x + scene.normals[i1] * bary.y + scene.normals[i2] * bary.z;
-    let nl = n_interp.length();
-    let mut n = if nl > 1e-12 && nl <= 3e38 { n_interp / nl } else { geo };
-    let at = Corners { scene, tri: [i0, i1, i2], bary };
-    let mid = scene.triangle_materials[id as usize];
-    if let Some(m) = scene.materials.get(mid as usize) {
-        n = normal_mapped(m, &at, n);
-    }
-    if geo.dot(to_eye) < 0.0 {
-        geo = -geo;
-        n = -n;
-    }
-    if n.dot(to_eye) < 0.0 {
-        n = (n - to_eye * (n.dot(to_eye) - 1e-3)).normalize();
-    }
-    if n.dot(n).is_nan() || n.dot(n) <= 0.5 {
-        n = geo;
-    }
-    let mut s =
-        GSample { depth: stored_depth(f, d), normal: n, material: mid, ..GSample::default() };
-    if let Some(m) = scene.materials.get(mid as usize) {
-        let v = material_at(m, &at);
-        s.base_color = v.base_color;
-        s.roughness = v.roughness;
-        s.metallic = v.metallic;
-        s.reflectivity = v.reflectivity;
-        s.occlusion = v.occlusion;
-        s.emissive = v.emissive;
-    }
+    let mut s = surface_sample(scene, id, [i0, i1, i2], bary, to_eye);
+    s.depth = stored_depth(f, d);
     let was = match previous {
         Some(last)
             if f.flags & crate::frame::FRAME_OBJECT_MOTION != 0

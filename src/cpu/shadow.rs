@@ -43,7 +43,7 @@ const SHADOW_BIAS_TEXELS: f32 = 1.0;
 const SHADOW_SLOPE_TEXELS: f32 = 2.0;
 const SHADOW_NORMAL_OFFSET_TEXELS: f32 = 1.0;
 
-fn shadow_face_index(count: u32, d: Vec3) -> u32 {
+pub(crate) fn shadow_face_index(count: u32, d: Vec3) -> u32 {
     if count < 6 {
         return 0;
     }

@@ -209,9 +209,12 @@ pub struct ReflectionsUniform {
     pub pcf: u32,
     /// Padding.
     pub _pad: [u32; 2],
+    /// The scene's bounding sphere: world centre and radius. A ray the screen does not place is
+    /// followed through the shadow maps within it; radius 0: it is not.
+    pub bounds: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<ReflectionsUniform>() == 128);
+const _: () = assert!(std::mem::size_of::<ReflectionsUniform>() == 144);
 mirrored!(
     ReflectionsUniform,
     "reflections.wgsl",
@@ -230,7 +233,8 @@ mirrored!(
         offsets,
         widths,
         light_count,
-        pcf
+        pcf,
+        bounds
     ]
 );
 
@@ -269,6 +273,7 @@ impl ReflectionsUniform {
             light_count: 0,
             pcf: 0,
             _pad: [0; 2],
+            bounds: [0.0; 4],
         }
     }
 
@@ -276,6 +281,18 @@ impl ReflectionsUniform {
     /// maps filtered with radius `pcf` (0 without shadow maps).
     pub fn with_lights(self, light_count: u32, pcf: u32) -> Self {
         ReflectionsUniform { light_count, pcf, ..self }
+    }
+
+    /// The same, with the scene's axis-aligned bounds `(lo, hi)`: rays the screen does not place
+    /// are followed through the shadow maps within their bounding sphere.
+    pub fn with_bounds(self, bounds: Option<(glam::Vec3, glam::Vec3)>) -> Self {
+        let bounds = bounds.map_or([0.0; 4], |(lo, hi)| {
+            let centre = (lo + hi) * 0.5;
+            // A little past the corners, so that a surface on the bounds is inside.
+            let radius = (hi - lo).length() * 0.5 * 1.001 + 1e-6;
+            [centre.x, centre.y, centre.z, radius]
+        });
+        ReflectionsUniform { bounds, ..self }
     }
 }
 

@@ -19,6 +19,10 @@ pub(crate) struct ReflectionsStage {
     tiles: wgpu::Buffer,
     args: wgpu::Buffer,
     output: wgpu::Buffer,
+    /// The rays followed through the shadow maps (a count, then pixel and distance per ray) and
+    /// the indirect arguments of the kernel that follows them.
+    followed: wgpu::Buffer,
+    hidden_args: wgpu::Buffer,
     /// Bound in place of an environment map when there is none.
     no_environment: wgpu::Buffer,
     tiles_x: u32,
@@ -47,6 +51,12 @@ impl ReflectionsStage {
             ),
             args: storage("deep-gbuffer.reflections.args", 16, wgpu::BufferUsages::INDIRECT),
             output: storage("deep-gbuffer.reflections.output", pixels * 16, none),
+            followed: storage("deep-gbuffer.reflections.followed", pixels * 8 + 4, none),
+            hidden_args: storage(
+                "deep-gbuffer.reflections.hidden_args",
+                16,
+                wgpu::BufferUsages::INDIRECT,
+            ),
             no_environment: storage("deep-gbuffer.reflections.no_environment", 16, none),
             tiles_x,
             tiles_y,
@@ -72,7 +82,8 @@ impl ReflectionsStage {
             scene.info().ambient.to_array(),
             environment,
         )
-        .with_lights(scene.info().lights.len() as u32, pcf);
+        .with_lights(scene.info().lights.len() as u32, pcf)
+        .with_bounds(scene.info().bounds);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
     }
 
@@ -87,6 +98,9 @@ impl Stage for ReflectionsStage {
         debug_assert_eq!(*id, PassId::Reflections);
         rec.encoder().clear_buffer(&self.tiles, 0, None);
         rec.encoder().clear_buffer(&self.output, 0, None);
+        if ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps {
+            rec.encoder().clear_buffer(&self.followed, 0, Some(4));
+        }
         let mut pass = rec.pass(id);
         self.pyramid.record(ctx, &mut pass, PyramidKind::Nearest, ctx.gbuffer[0], &self.nearest);
         let mut entries = vec![
@@ -104,12 +118,31 @@ impl Stage for ReflectionsStage {
         // A hit surface is shaded as the composite shades it, with the terms the frame has, and
         // lit towards the point its ray left.
         let mut defines = ctx.settings.precision.defines();
+        // Rays the screen cannot place follow the shadow maps, where there are some.
+        let follow = ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps;
         if let Some(s) = &ctx.shadows {
             defines.push("SHADOWS");
             entries.extend([
                 (slot::FACES, s.faces),
                 (slot::LIGHT_FACES, s.light_faces),
                 (slot::ATLAS, s.atlas),
+            ]);
+        }
+        if follow {
+            defines.push("FOLLOW");
+            let b = ctx.scene.buffers();
+            entries.extend([
+                (slot::POSITIONS, &b.positions),
+                (slot::NORMALS, &b.normals),
+                (slot::UVS, &b.uvs),
+                (slot::INDICES, &b.indices),
+                (slot::TRI_MATERIALS, &b.triangle_materials),
+                (slot::MATERIALS, &b.materials),
+                (slot::TEXELS, &b.texels),
+                (slot::UVS1, &ctx.scene.uvs1),
+                (slot::TANGENTS, &ctx.scene.tangents),
+                (slot::FOLLOWED, &self.followed),
+                (slot::HIDDEN_ARGS, &self.hidden_args),
             ]);
         }
         for (define, s, buffer) in
@@ -120,10 +153,18 @@ impl Stage for ReflectionsStage {
                 entries.push((s, buffer));
             }
         }
-        let get = |entry| ctx.pipelines.get(ctx.device, "reflections", entry, &defines, &[]);
+        // The surface code's texture switch exists with the followed rays' kernel only.
+        let textures = [super::textures_constant(ctx.scene)];
+        let constants: &[(&str, f64)] = if follow { &textures } else { &[] };
+        let get = |entry| ctx.pipelines.get(ctx.device, "reflections", entry, &defines, constants);
         let groups = gpu::dispatch_size((self.tiles_x * self.tiles_y).div_ceil(64));
         get("reflections_classify").dispatch(ctx.device, &mut pass, &entries, groups);
         get("reflections_args").dispatch(ctx.device, &mut pass, &entries, (1, 1));
         get("reflections_march").dispatch_indirect(ctx.device, &mut pass, &entries, &self.args, 0);
+        if follow {
+            get("reflections_hidden_args").dispatch(ctx.device, &mut pass, &entries, (1, 1));
+            let args = &self.hidden_args;
+            get("reflections_hidden").dispatch_indirect(ctx.device, &mut pass, &entries, args, 0);
+        }
     }
 }

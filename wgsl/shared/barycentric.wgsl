@@ -41,3 +41,26 @@ fn ray_barycentrics(ray: PixelRay, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> 
     }
     return bary;
 }
+
+// Where the ray origin + t dir meets the triangle (a, b, c) (Moller-Trumbore, either side):
+// (t, barycentrics), or t = -1 where it misses (outside the triangle by more than `slack` of its
+// barycentric coordinates, parallel to it, or degenerate).
+fn ray_triangle(origin: vec3<f32>, dir: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, slack: f32) -> vec4<f32> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let pv = cross(dir, e2);
+    let det = dot(e1, pv);
+    if !(abs(det) > 1e-30) {
+        return vec4<f32>(-1.0, 0.0, 0.0, 0.0);
+    }
+    let tv = origin - a;
+    let qv = cross(tv, e1);
+    let u = dot(tv, pv) / det;
+    let v = dot(dir, qv) / det;
+    let bary = vec3<f32>(1.0 - u - v, u, v);
+    if !all(bary >= vec3<f32>(-slack)) {
+        return vec4<f32>(-1.0, 0.0, 0.0, 0.0);
+    }
+    let raw = clamp(bary, vec3<f32>(0.0), vec3<f32>(1.0));
+    return vec4<f32>(dot(e2, qv) / det, raw / (raw.x + raw.y + raw.z));
+}
