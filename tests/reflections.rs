@@ -77,18 +77,23 @@ fn march_matches(
     expected
 }
 
-/// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
-/// it at `wall_z`, `half_width` either side of x = 0 and `height` tall.
-fn mirror_before_a_wall(wall: Material, wall_z: f32, half_width: f32, height: f32) -> Scene {
-    let mut scene = Scene::default();
-    scene.materials.push(Material {
+/// A black, double-sided mirror: reflectivity 1, roughness 0.
+fn mirror() -> Material {
+    Material {
         name: "mirror".into(),
         base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
         reflectivity: 1.0,
         roughness: 0.0,
         double_sided: true,
         ..Default::default()
-    });
+    }
+}
+
+/// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
+/// it at `wall_z`, `half_width` either side of x = 0 and `height` tall.
+fn mirror_before_a_wall(wall: Material, wall_z: f32, half_width: f32, height: f32) -> Scene {
+    let mut scene = Scene::default();
+    scene.materials.push(mirror());
     scene.materials.push(Material { double_sided: true, ..wall });
     let side = 4.0 * half_width.max(-wall_z);
     let floor = [
@@ -534,18 +539,11 @@ fn invalid_reflection_settings_are_refused() {
 }
 
 /// A mirror wall at z = -2 behind a box whose face towards the mirror the camera does not see;
-/// a sun behind the mirror, high enough to clear its top edge, lights that face. The box's faces are single-sided quads
-/// (outward normals, counter-clockwise seen from outside), material 1.
+/// a sun behind the mirror, high enough to clear its top edge, lights that face. The box's faces
+/// are single-sided quads (outward normals, counter-clockwise seen from outside), material 1.
 fn a_box_before_a_mirror() -> Scene {
     let mut scene = Scene::default();
-    scene.materials.push(Material {
-        name: "mirror".into(),
-        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
-        reflectivity: 1.0,
-        roughness: 0.0,
-        double_sided: true,
-        ..Default::default()
-    });
+    scene.materials.push(mirror());
     scene.materials.push(Material {
         name: "box".into(),
         base_color: Vec4::new(0.8, 0.5, 0.2, 1.0),

@@ -109,6 +109,27 @@ impl<'a> Recorder<'a> {
     }
 }
 
+/// The bind entries of the scene buffers `wgsl/shared/surface.wgsl` reads (a triangle's surface
+/// where a ray meets it), for the kernel whose generated slots module is `$slot`.
+macro_rules! surface_entries {
+    ($slot:ident, $scene:expr) => {{
+        let scene: &crate::SceneBuffers = $scene;
+        let b = scene.buffers();
+        [
+            ($slot::POSITIONS, &b.positions),
+            ($slot::NORMALS, &b.normals),
+            ($slot::UVS, &b.uvs),
+            ($slot::INDICES, &b.indices),
+            ($slot::TRI_MATERIALS, &b.triangle_materials),
+            ($slot::MATERIALS, &b.materials),
+            ($slot::TEXELS, &b.texels),
+            ($slot::UVS1, &scene.uvs1),
+            ($slot::TANGENTS, &scene.tangents),
+        ]
+    }};
+}
+pub(crate) use surface_entries;
+
 /// The pipeline constant `TEXTURES` (`wgsl/shared/texture.wgsl`) for `scene`: texture reads
 /// compiled in unless the scene is marked [`textureless`](crate::SceneInfo::textureless).
 pub(crate) fn textures_constant(scene: &SceneBuffers) -> (&'static str, f64) {

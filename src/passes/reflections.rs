@@ -130,20 +130,9 @@ impl Stage for ReflectionsStage {
         }
         if follow {
             defines.push("FOLLOW");
-            let b = ctx.scene.buffers();
-            entries.extend([
-                (slot::POSITIONS, &b.positions),
-                (slot::NORMALS, &b.normals),
-                (slot::UVS, &b.uvs),
-                (slot::INDICES, &b.indices),
-                (slot::TRI_MATERIALS, &b.triangle_materials),
-                (slot::MATERIALS, &b.materials),
-                (slot::TEXELS, &b.texels),
-                (slot::UVS1, &ctx.scene.uvs1),
-                (slot::TANGENTS, &ctx.scene.tangents),
-                (slot::FOLLOWED, &self.followed),
-                (slot::HIDDEN_ARGS, &self.hidden_args),
-            ]);
+            entries.extend(super::surface_entries!(slot, ctx.scene));
+            entries
+                .extend([(slot::FOLLOWED, &self.followed), (slot::HIDDEN_ARGS, &self.hidden_args)]);
         }
         for (define, s, buffer) in
             [("AO", slot::AV, ctx.av), ("RADIOSITY", slot::IRRADIANCE, ctx.irradiance)]

@@ -164,22 +164,14 @@ pub(crate) fn resolve_view(
         ("POSITION_FLAGS", f64::from(ctx.settings.position.frame_flags())),
     ];
     let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
-    let b = ctx.scene.buffers();
-    let entries = [
+    let positions = &ctx.scene.buffers().positions;
+    let mut entries = vec![
         (slot::FRAME, frame),
-        (slot::POSITIONS, &b.positions),
-        (slot::NORMALS, &b.normals),
-        (slot::UVS, &b.uvs),
-        (slot::INDICES, &b.indices),
-        (slot::TRI_MATERIALS, &b.triangle_materials),
-        (slot::MATERIALS, &b.materials),
-        (slot::TEXELS, &b.texels),
         (slot::VIS, vis),
         (slot::GBUFFER, gbuffer),
-        (slot::UVS1, &ctx.scene.uvs1),
-        (slot::TANGENTS, &ctx.scene.tangents),
-        (slot::PREVIOUS_POSITIONS, ctx.previous_positions.unwrap_or(&b.positions)),
+        (slot::PREVIOUS_POSITIONS, ctx.previous_positions.unwrap_or(positions)),
     ];
+    entries.extend(super::surface_entries!(slot, ctx.scene));
     match args {
         Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
         None => pipeline.dispatch_pixels(ctx.device, pass, &entries, size),
