@@ -23,20 +23,22 @@
 //   gives the mapping) when one is set, else the constant sky. Hits fade out near the screen
 //   edges; the confidence (alpha) is 1 for a hit far from the edges, 0 for the environment.
 //   Output: reflectivity * colour.
-// reflections_hidden (FOLLOW): one thread per pixel. A reflective pixel none of whose rays
-//   the screen placed (confidence 0) follows them through the lights' shadow maps instead: what
-//   a light sees first is a surface too, lit by it, and often one neither layer holds (the side
-//   of a sphere turned from the camera, towards the sun). The mirror ray, within the scene's
-//   bounding sphere and `max_distance`, takes HIDDEN_STEPS even steps; where a step passes
-//   behind the surface a shadow map holds at its texel (where it was in front at the step
-//   before), HIDDEN_REFINE bisections find the crossing and the ray is intersected exactly
-//   with the triangles the map holds on either side of it (a ray that only enters a shadow
-//   meets neither). The nearest such hit over the lights is shaded from its triangle
-//   (shared/surface.wgsl: normal, material, textures), lit towards the point the ray left
-//   (shared/lit.wgsl), with the ambient term and no obscurance or gathered light (the screen
-//   holds none there). A glossy lobe's directions travel as far as the mirror ray did, as in
-//   the march, and see the triangle a map holds within the tolerance there, else what the
-//   mirror ray saw. Pixels where nothing is found keep the environment. Confidence 1.
+// reflections_hidden (FOLLOW, with SHADOWS): the mirror rays the march could not place, which it
+//   lists (`followed`, one thread each; reflections_hidden_args sizes the dispatch): those that
+//   found nothing on screen, ran into the side of a solid the camera does not see (layer 0's
+//   shell met from behind: the march stops there, HIDDEN_SIDE) or hit a silhouette pixel. What a
+//   light sees first is a surface too, lit by it, and often one neither layer holds (the side of
+//   a sphere turned from the camera, towards the sun). Each ray, up to 1.25 times where the
+//   march stopped (found nothing: the scene's bounding sphere), takes HIDDEN_STEPS even steps
+//   through every shadow-casting light's map; where a step lies behind the surface the map holds
+//   at its texel and the step before did not, HIDDEN_REFINE bisections find the crossing and
+//   the ray is intersected exactly with the triangles the map holds on either side of it (a ray
+//   that only enters a shadow meets neither). The nearest hit over the lights is shaded from its
+//   triangle (shared/surface.wgsl: normal, material, textures), lit towards the point the ray
+//   left (shared/lit.wgsl), with the ambient term and no obscurance or gathered light, its
+//   roughness widened by what the reflecting pixel gathers over (its lobe and its footprint)
+//   times (1 + distance x the hit's curvature); at a silhouette only where the camera does not
+//   see the side the ray meets. It replaces the pixel's reflection, confidence 1.
 // src/cpu/reflections.rs is the same on the CPU.
 // defines: PACKED AO RADIOSITY SHADOWS FOLLOW (with SHADOWS: reflections_hidden)
 
@@ -572,11 +574,15 @@ struct MapPoint {
 }
 
 fn map_point(i: u32, p: vec3<f32>) -> MapPoint {
-    var out = MapPoint(0.0, 0u, false);
     let info = light_faces[i];
     let f = faces[info.x + shadow_face_index(info.y, p - lights[i].position)];
     let v = mat_mul(f.view, vec4<f32>(p, 1.0));
-    let c = mat_mul(f.proj, v);
+    return map_at(f, mat_mul(f.proj, v), v.z);
+}
+
+// The same at the point of face f's clip position c and view z `vz`.
+fn map_at(f: ShadowFace, c: vec4<f32>, vz: f32) -> MapPoint {
+    var out = MapPoint(0.0, 0u, false);
     if !(c.w > 0.0) {
         return out;
     }
@@ -590,7 +596,36 @@ fn map_point(i: u32, p: vec3<f32>) -> MapPoint {
     if word.y == 0xffffffffu {
         return out;
     }
-    return MapPoint(bitcast<f32>(word.y) + v.z, word.x, true);
+    return MapPoint(bitcast<f32>(word.y) + vz, word.x, true);
+}
+
+// Light i's map at the point o + d t of a ray, for t in [0, t_end]: a light of one face (sun,
+// spot) interpolates the ray's clip position and view z between its ends (both are affine in
+// the point), a point light picks the face of each point.
+struct RayInMap {
+    i: u32,
+    one_face: bool,
+    face: ShadowFace,
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    z0: f32,
+    z1: f32,
+}
+
+fn ray_in_map(i: u32, o: vec3<f32>, d: vec3<f32>, t_end: f32) -> RayInMap {
+    let info = light_faces[i];
+    let f = faces[info.x];
+    let v0 = mat_mul(f.view, vec4<f32>(o, 1.0));
+    let v1 = mat_mul(f.view, vec4<f32>(o + d * t_end, 1.0));
+    return RayInMap(i, info.y == 1u, f, mat_mul(f.proj, v0), mat_mul(f.proj, v1), v0.z, v1.z);
+}
+
+fn map_along(m: RayInMap, o: vec3<f32>, d: vec3<f32>, t: f32, t_end: f32) -> MapPoint {
+    if m.one_face {
+        let s = t / t_end;
+        return map_at(m.face, m.c0 + (m.c1 - m.c0) * s, m.z0 + (m.z1 - m.z0) * s);
+    }
+    return map_point(m.i, o + d * t);
 }
 
 // Where a world-space ray meets the surface of a triangle: its parameter (-1: none), the
@@ -638,6 +673,9 @@ fn scene_exit(o: vec3<f32>, d: vec3<f32>) -> f32 {
 // meets within t_end (the nearest over the lights).
 fn hidden_hit(o: vec3<f32>, d: vec3<f32>, t_end: f32) -> HiddenHit {
     var best = HiddenHit(-1.0, 0u, vec3<f32>(0.0));
+    if !(t_end > 0.0) {
+        return best;
+    }
     var reach = t_end;
     // Past the point's own surface.
     let t_min = 1e-4 * params.bounds.w;
@@ -645,6 +683,7 @@ fn hidden_hit(o: vec3<f32>, d: vec3<f32>, t_end: f32) -> HiddenHit {
         if light_faces[i].y == 0u {
             continue;
         }
+        let ray = ray_in_map(i, o, d, t_end);
         var t0 = 0.0;
         var front = true;
         for (var k = 1u; k <= HIDDEN_STEPS; k++) {
@@ -652,7 +691,7 @@ fn hidden_hit(o: vec3<f32>, d: vec3<f32>, t_end: f32) -> HiddenHit {
             if t0 >= reach {
                 break;
             }
-            let m = map_point(i, o + d * t1);
+            let m = map_along(ray, o, d, t1, t_end);
             let behind = m.ok && m.gap < 0.0;
             if behind && front {
                 // The ray passed behind the map's surface between t0 and t1: where, and the
@@ -663,7 +702,7 @@ fn hidden_hit(o: vec3<f32>, d: vec3<f32>, t_end: f32) -> HiddenHit {
                 var id_lo = m.id;
                 for (var b = 0u; b < HIDDEN_REFINE; b++) {
                     let mid = 0.5 * (lo + hi);
-                    let mm = map_point(i, o + d * mid);
+                    let mm = map_along(ray, o, d, mid, t_end);
                     if mm.ok && mm.gap < 0.0 {
                         hi = mid;
                         id_hi = mm.id;

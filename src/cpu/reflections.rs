@@ -10,7 +10,7 @@ use crate::cpu::pyramid::nearest;
 use crate::cpu::resolve::{ray_triangle, surface_sample};
 use crate::cpu::shadow::{Shadows, shadow_face_index};
 use crate::environment::Environment;
-use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform};
+use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform, ShadowFace};
 use crate::gbuffer::GSample;
 use crate::scene::{GpuLight, Scene};
 
@@ -409,7 +409,11 @@ impl Hidden<'_> {
         let light = Vec3::from(self.lights[i].position);
         let face = &sh.faces[(first + shadow_face_index(count, p - light)) as usize];
         let v = mat_mul(&face.view, p.extend(1.0).to_array());
-        let c = mat_mul(&face.proj, v.to_array());
+        self.map_at(face, mat_mul(&face.proj, v.to_array()), v.z)
+    }
+
+    /// As `map_at`: the same at face `face`'s clip position `c` and view z `vz`.
+    fn map_at(&self, face: &ShadowFace, c: Vec4, vz: f32) -> Option<(f32, u32)> {
         if c.w.is_nan() || c.w <= 0.0 {
             return None;
         }
@@ -419,9 +423,25 @@ impl Hidden<'_> {
             return None;
         }
         let t = uv.as_uvec2();
-        let word = sh.atlas[(face.offset + t.y * face.resolution + t.x) as usize];
+        let word = self.shadows.atlas[(face.offset + t.y * face.resolution + t.x) as usize];
         let depth = (word >> 32) as u32;
-        (depth != u32::MAX).then(|| (f32::from_bits(depth) + v.z, word as u32))
+        (depth != u32::MAX).then(|| (f32::from_bits(depth) + vz, word as u32))
+    }
+
+    /// As `ray_in_map` and `map_along`: light i's map at `o + d t` for t in [0, t_end], a
+    /// one-face light's clip position and view z interpolated between the ray's ends.
+    fn map_along(&self, i: usize, (o, d): (Vec3, Vec3), t: f32, t_end: f32) -> Option<(f32, u32)> {
+        let sh = self.shadows;
+        let [first, count] = sh.light_faces.get(i).copied().unwrap_or([0, 0]);
+        if count != 1 {
+            return self.map_point(i, o + d * t);
+        }
+        let face = &sh.faces[first as usize];
+        let v0 = mat_mul(&face.view, o.extend(1.0).to_array());
+        let v1 = mat_mul(&face.view, (o + d * t_end).extend(1.0).to_array());
+        let (c0, c1) = (mat_mul(&face.proj, v0.to_array()), mat_mul(&face.proj, v1.to_array()));
+        let s = t / t_end;
+        self.map_at(face, c0 + (c1 - c0) * s, v0.z + (v1.z - v0.z) * s)
     }
 
     fn corners(&self, id: u32) -> [usize; 3] {
@@ -461,6 +481,9 @@ impl Hidden<'_> {
     /// unit d meets within t_end.
     fn hidden_hit(&self, o: Vec3, d: Vec3, t_end: f32) -> Option<(f32, u32, Vec3)> {
         let mut best = None;
+        if t_end.is_nan() || t_end <= 0.0 {
+            return None;
+        }
         let mut reach = t_end;
         let t_min = 1e-4 * self.u.bounds[3];
         for i in 0..self.lights.len() {
@@ -473,7 +496,7 @@ impl Hidden<'_> {
                 if t0 >= reach {
                     break;
                 }
-                let m = self.map_point(i, o + d * t1);
+                let m = self.map_along(i, (o, d), t1, t_end);
                 let behind = m.is_some_and(|(gap, _)| gap < 0.0);
                 if behind && front {
                     let (mut lo, mut hi) = (t0, t1);
@@ -481,7 +504,7 @@ impl Hidden<'_> {
                     let (mut id_hi, mut id_lo) = (id, id);
                     for _ in 0..HIDDEN_REFINE {
                         let mid = 0.5 * (lo + hi);
-                        match self.map_point(i, o + d * mid) {
+                        match self.map_along(i, (o, d), mid, t_end) {
                             Some((gap, id)) if gap < 0.0 => {
                                 hi = mid;
                                 id_hi = id;
