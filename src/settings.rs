@@ -131,15 +131,17 @@ pub enum AoEstimator {
 /// Named accuracy levels, chosen from the Pareto fronts that `deep-gbuffer sweep` measured on the
 /// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance's estimator, taps and
 /// slices, the radiosity's taps, the number of layers the effects read and the G-buffer encoding
-/// (full: the packed encoding measured no faster on lavapipe; it halves the G-buffer's memory);
-/// the rest stays as given.
+/// (full: the packed encoding measured no faster on lavapipe; it halves the G-buffer's memory),
+/// and whether reflections follow rays through the shadow maps (all but `Low`); the rest stays
+/// as given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[derive(serde::Serialize)]
 pub enum Preset {
     /// `bitmask` obscurance and `slices` radiosity with 32 taps each, both at half resolution,
     /// layer 0 only: the cheapest point of both fronts (below the error of 16 taps at full
-    /// resolution, in less time).
+    /// resolution, in less time); reflections on screen only (no rays followed through the
+    /// shadow maps, [`ReflectionSettings::shadow_maps`]).
     Low,
     /// 32 obscurance and 32 radiosity taps, both layers: the defaults.
     Balanced,
@@ -173,6 +175,7 @@ impl Preset {
         // that needs none.
         settings.layers = if layers == 1 { 1 } else { 0 };
         settings.precision = precision;
+        settings.reflections.shadow_maps = self != Preset::Low;
     }
 }
 

@@ -231,6 +231,7 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
     assert_eq!((low.ao.downsample, low.radiosity.downsample), (2, 2));
     assert_eq!(low.ao.estimator, deep_gbuffer::AoEstimator::Bitmask);
     assert_eq!(low.precision, deep_gbuffer::Precision::Full);
+    assert!(!low.reflections.shadow_maps, "low keeps reflections on screen");
     let mut ultra = Settings::default();
     Preset::Ultra.apply(&mut ultra);
     assert_eq!(
@@ -238,6 +239,7 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
         (64, 2, 64, 0)
     );
     assert!(ultra.ao.two_layers);
+    assert!(ultra.reflections.shadow_maps);
     for preset in [Preset::Low, Preset::Balanced, Preset::High, Preset::Ultra] {
         let mut s = Settings::default();
         preset.apply(&mut s);
