@@ -301,6 +301,14 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         let stdout = String::from_utf8_lossy(&output.stdout);
         assert!(stdout.contains(expect) && stdout.contains(" ms on "), "{effect}: {stdout}");
     }
+    // Reflections kept on screen (no rays followed through the shadow maps).
+    let output = cli()
+        .args(["truth", "builtin:grid-20000", "--effect", "reflections", "--size", "24x18"])
+        .args(["--spp", "2", "--reflection-screen-only", "--compare"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("rmse"));
     // Over an open shutter: the truth of a turning camera, compared with the blurred frame.
     let output = cli()
         .args(["truth", "builtin:cornell", "--effect", "full", "--size", "24x18", "--spp", "2"])
