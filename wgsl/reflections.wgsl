@@ -428,9 +428,9 @@ fn silhouette(q: u32) -> bool {
     let x = i32(q % frame.width);
     let y = i32(q / frame.width);
     let z = layer_depth(q, 0u);
+    var beside = array<vec2<i32>, 4>(vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1));
     for (var k = 0u; k < 4u; k++) {
-        let o = select(select(vec2<i32>(0, -1), vec2<i32>(0, 1), k == 2u), select(vec2<i32>(-1, 0), vec2<i32>(1, 0), k == 0u), k < 2u);
-        let t = vec2<i32>(x, y) + o;
+        let t = vec2<i32>(x, y) + beside[k];
         if all(t >= vec2<i32>(0)) && t.x < i32(frame.width) && t.y < i32(frame.height) {
             let zt = layer_depth(u32(t.y) * frame.width + u32(t.x), 0u);
             if !(zt > 0.0) || abs(zt - z) > params.thickness {
