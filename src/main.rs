@@ -135,6 +135,10 @@ struct SweepArgs {
     /// `true,false`.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_offscreen))]
     radiosity_offscreen: Vec<bool>,
+    /// Reflection rays the screen cannot place followed through the shadow maps or not, or
+    /// both, as `true,false`.
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().reflection_shadow_maps))]
+    reflection_shadow_maps: Vec<bool>,
     /// Rays through the lens per pixel to sweep (the depth of field runs when --camera gives an
     /// aperture; the truth then samples the lens).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().dof_samples))]
@@ -878,6 +882,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_downsample: args.ao_downsample,
         radiosity_downsample: args.radiosity_downsample,
         radiosity_offscreen: args.radiosity_offscreen,
+        reflection_shadow_maps: args.reflection_shadow_maps,
         dof_samples: args.dof_samples,
         transparency_layers: args.transparency_layers,
         shutter: args.shutter,

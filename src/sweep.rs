@@ -72,6 +72,9 @@ pub struct Knobs {
     /// The light of the surfaces no layer holds, from the reflective shadow maps
     /// ([`RadiositySettings::offscreen`]).
     pub radiosity_offscreen: bool,
+    /// Reflection rays the screen cannot place followed through the shadow maps
+    /// ([`ReflectionSettings::shadow_maps`](crate::ReflectionSettings::shadow_maps)).
+    pub reflection_shadow_maps: bool,
     /// Rays through the lens per pixel ([`DofSettings::samples`]; the depth of field runs when
     /// the sweep's camera has an aperture).
     pub dof_samples: u32,
@@ -129,6 +132,10 @@ impl Knobs {
                 downsample: self.radiosity_downsample,
                 offscreen: self.radiosity_offscreen,
                 ..base.radiosity.clone()
+            },
+            reflections: crate::ReflectionSettings {
+                shadow_maps: self.reflection_shadow_maps,
+                ..base.reflections.clone()
             },
             timings: true,
             width,
@@ -196,6 +203,8 @@ pub struct Grid {
     pub radiosity_downsample: Vec<u32>,
     /// The off-screen light on or off.
     pub radiosity_offscreen: Vec<bool>,
+    /// Reflection rays followed through the shadow maps or not.
+    pub reflection_shadow_maps: Vec<bool>,
     /// Rays through the lens per pixel.
     pub dof_samples: Vec<u32>,
     /// Transparency layers (peels).
@@ -235,6 +244,7 @@ impl Default for Grid {
             ao_downsample: vec![settings.ao.downsample],
             radiosity_downsample: vec![settings.radiosity.downsample],
             radiosity_offscreen: vec![settings.radiosity.offscreen],
+            reflection_shadow_maps: vec![settings.reflections.shadow_maps],
             dof_samples: vec![settings.dof.samples],
             transparency_layers: vec![settings.transparency.layers],
             shutter: vec![settings.motion_blur.shutter],
@@ -279,6 +289,7 @@ impl Grid {
             ao_downsample: settings.ao.downsample,
             radiosity_downsample: settings.radiosity.downsample,
             radiosity_offscreen: settings.radiosity.offscreen,
+            reflection_shadow_maps: settings.reflections.shadow_maps,
             dof_samples: settings.dof.samples,
             transparency_layers: settings.transparency.layers,
             shutter: settings.motion_blur.shutter,
@@ -297,6 +308,7 @@ impl Grid {
         let k = times(k, &self.ao_downsample, |k, v| k.ao_downsample = v);
         let k = times(k, &self.radiosity_downsample, |k, v| k.radiosity_downsample = v);
         let k = times(k, &self.radiosity_offscreen, |k, v| k.radiosity_offscreen = v);
+        let k = times(k, &self.reflection_shadow_maps, |k, v| k.reflection_shadow_maps = v);
         let k = times(k, &self.dof_samples, |k, v| k.dof_samples = v);
         let k = times(k, &self.transparency_layers, |k, v| k.transparency_layers = v);
         let k = times(k, &self.shutter, |k, v| k.shutter = v);
@@ -613,7 +625,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -636,7 +648,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -652,6 +664,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.ao_downsample,
             k.radiosity_downsample,
             k.radiosity_offscreen,
+            k.reflection_shadow_maps,
             k.dof_samples,
             k.transparency_layers,
             k.shutter,
@@ -710,7 +723,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 18] = [
+    let optional: [Column; 19] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("radiosity slices", |k| k.radiosity_slices.to_string()),
@@ -723,6 +736,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("AO downsample", |k| k.ao_downsample.to_string()),
         ("radiosity downsample", |k| k.radiosity_downsample.to_string()),
         ("off-screen light", |k| k.radiosity_offscreen.to_string()),
+        ("reflections through shadow maps", |k| k.reflection_shadow_maps.to_string()),
         ("lens rays", |k| k.dof_samples.to_string()),
         ("transparency layers", |k| k.transparency_layers.to_string()),
         ("shutter", |k| k.shutter.to_string()),
