@@ -758,7 +758,11 @@ fn hidden_seen(h: HiddenHit, d: vec3<f32>, blur: f32) -> vec3<f32> {
         let nj = load3(1u, tri[(e + 1u) % 3u]);
         let len = length(w[(e + 1u) % 3u] - w[e]);
         if len > 0.0 && dot(ni, ni) > 0.0 && dot(nj, nj) > 0.0 {
-            curvature = max(curvature, length(normalize(nj) - normalize(ni)) / len);
+            // Finite only: a vertex normal past f32's range normalizes to NaN.
+            let c = length(normalize(nj) - normalize(ni)) / len;
+            if c < 1e30 {
+                curvature = max(curvature, c);
+            }
         }
     }
     let widened = blur * (1.0 + h.t * min(curvature, 1e6));
@@ -811,7 +815,9 @@ fn reflections_hidden(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
             let s1 = sample_at(u32(a1.y) * frame.width + u32(a1.x));
             if s0.depth > 0.0 && s1.depth > 0.0 && abs(s0.depth - s1.depth) < 0.1 * s.depth {
                 let dn = 0.25 * length(s1.normal - s0.normal);
-                spread += dn * dn;
+                if dn < 1e30 {
+                    spread += dn * dn;
+                }
             }
         }
     }

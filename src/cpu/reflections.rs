@@ -559,7 +559,10 @@ impl Hidden<'_> {
             let len = (w[(e + 1) % 3] - w[e]).length();
             let (ni, nj) = (scene.normals[i], scene.normals[j]);
             if len > 0.0 && ni.dot(ni) > 0.0 && nj.dot(nj) > 0.0 {
-                curvature = curvature.max((nj.normalize() - ni.normalize()).length() / len);
+                let c = (nj.normalize() - ni.normalize()).length() / len;
+                if c < 1e30 {
+                    curvature = curvature.max(c);
+                }
             }
         }
         let widened = blur * (1.0 + t * curvature.min(1e6));
@@ -595,7 +598,9 @@ impl Hidden<'_> {
                 let s1 = &layer0[(y1 as u32 * f.width + x1 as u32) as usize];
                 if s0.depth > 0.0 && s1.depth > 0.0 && (s0.depth - s1.depth).abs() < 0.1 * s.depth {
                     let dn = 0.25 * (s1.normal - s0.normal).length();
-                    spread += dn * dn;
+                    if dn < 1e30 {
+                        spread += dn * dn;
+                    }
                 }
             }
         }
