@@ -612,9 +612,10 @@ fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
     assert_eq!(layer0[centre].material, 1, "the camera sees the box");
     let [with, without] = [&followed, &unfollowed]
         .map(|r| read4(&r.renderer, r.renderer.reflections_buffer().unwrap()));
-    // The back face's radiance: Lambertian (roughness 1, no metal), lit at n.l = 1/sqrt(5)
-    // with irradiance 3, no ambient term reaches it (its obscurance is 1, the ambient 0.5 blue
-    // only): base / pi * 3 / sqrt(5), the blue channel plus the ambient's share.
+    // The back face's radiance, red and green (the ambient sky is blue only): Lambertian
+    // (roughness 1, no metal), lit at n.l = 1/sqrt(5) with irradiance 3: base / pi * 3 /
+    // sqrt(5). Within 5%: the BRDF's specular lobe at roughness 1 adds 2-3% (measured: red
+    // 0.348 against 0.342, green 0.220 against 0.214).
     let lit = Vec3::new(0.8, 0.5, 0.2) / std::f32::consts::PI * 3.0 / 5f32.sqrt();
     let inv_view = camera.view().inverse();
     let layer1 = followed.renderer.read_gbuffer(&g.device, &g.queue, 1).unwrap().samples;
@@ -642,7 +643,7 @@ fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
         counted += 1;
         // The GPU and the CPU reference alike.
         let near =
-            |v: Vec4| (v.x - lit.x).abs() < 0.15 * lit.x && (v.y - lit.y).abs() < 0.15 * lit.y;
+            |v: Vec4| (v.x - lit.x).abs() < 0.05 * lit.x && (v.y - lit.y).abs() < 0.05 * lit.y;
         if near(with[p]) && near(cpu[p]) {
             shown += 1;
         }
@@ -653,5 +654,5 @@ fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
         );
     }
     assert!(counted > 20, "mirrored rays meet the hidden face ({counted})");
-    assert!(shown * 10 >= counted * 9, "{shown} of {counted} mirror pixels show the lit face");
+    assert_eq!(shown, counted, "mirror pixels that show the lit face");
 }

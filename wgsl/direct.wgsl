@@ -100,10 +100,7 @@ fn shade(pixel: vec2<u32>) {
         return;
     }
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0)).xyz;
-    var v = normalize(frame.inv_view[3].xyz - world);
-    if frame.ortho != 0u {
-        v = normalize(frame.inv_view[2].xyz);
-    }
+    let v = toward_camera(frame, world);
     let light = lit(s, world, v, direct.light_count, direct.pcf);
     radiance[p] = vec4<f32>(light.radiance, 1.0);
 #if DIFFUSE

@@ -49,6 +49,8 @@
 #include "shared/lit.wgsl"
 #include "shared/indirect.wgsl"
 
+// A followed ray's reach where the march found nothing: to the scene's edge.
+const TO_SCENE_EDGE: f32 = 3.4e38;
 // A march's outcome where it ran into the side of a solid the camera does not see.
 const HIDDEN_SIDE: u32 = 3u;
 // Most cells one ray visits (each a pyramid read, or at level 0 a pixel's test).
@@ -476,7 +478,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     // silhouette's pixel onto the side behind it).
     var follow = 0.0;
     if hit.layer == 2u {
-        follow = 3.4e38;
+        follow = TO_SCENE_EDGE;
     } else if hit.layer == HIDDEN_SIDE {
         follow = went;
     } else if hit.layer == 0u && silhouette(hit.q) {
@@ -574,8 +576,7 @@ struct MapPoint {
 }
 
 fn map_point(i: u32, p: vec3<f32>) -> MapPoint {
-    let info = light_faces[i];
-    let f = faces[info.x + shadow_face_index(info.y, p - lights[i].position)];
+    let f = shadow_face_at(i, lights[i], p);
     let v = mat_mul(f.view, vec4<f32>(p, 1.0));
     return map_at(f, mat_mul(f.proj, v), v.z);
 }
@@ -736,11 +737,7 @@ fn faces_camera(h: HiddenHit, x: vec3<f32>, o: vec3<f32>) -> bool {
     let tri = triangle_vertices(h.id);
     let w0 = load3(0u, tri.x);
     let geo = cross(load3(0u, tri.y) - w0, load3(0u, tri.z) - w0);
-    var to_camera = mat_mul(frame.inv_view, vec4<f32>(0.0, 0.0, 0.0, 1.0)).xyz - x;
-    if frame.ortho != 0u {
-        to_camera = mat_mul(frame.inv_view, vec4<f32>(0.0, 0.0, 1.0, 0.0)).xyz;
-    }
-    return dot(geo, to_camera) * dot(geo, o - x) > 0.0;
+    return dot(geo, toward_camera(frame, x)) * dot(geo, o - x) > 0.0;
 }
 
 // What a ray along unit d sees at hidden hit h: the surface lit towards the ray's origin,

@@ -58,16 +58,10 @@ fn shade(pixel: vec2<u32>) -> GSample {
     let b = mat_mul(frame.view, vec4<f32>(w1, 1.0)).xyz;
     let c = mat_mul(frame.view, vec4<f32>(w2, 1.0)).xyz;
     let ray = pixel_ray(frame, vec2<f32>(pixel) + 0.5, d);
-    let origin = ray.origin;
     let bary = ray_barycentrics(ray, a, b, c);
     let world = w0 * bary.x + w1 * bary.y + w2 * bary.z;
 
-    let eye = mat_mul(frame.inv_view, vec4<f32>(origin, 1.0)).xyz;
-    var to_eye = normalize(eye - world);
-    if frame.ortho != 0u {
-        to_eye = normalize(mat_mul(frame.inv_view, vec4<f32>(0.0, 0.0, 1.0, 0.0)).xyz);
-    }
-    var s = surface_sample(id, vec3<u32>(i0, i1, i2), array<vec3<f32>, 3>(w0, w1, w2), bary, to_eye);
+    var s = surface_sample(id, vec3<u32>(i0, i1, i2), array<vec3<f32>, 3>(w0, w1, w2), bary, toward_camera(frame, world));
     s.depth = stored_depth(frame, d);
     // Motion: where this point was on screen in the previous frame: the same barycentrics on the
     // triangle as it stood then (OBJECT_MOTION), or the same world point (still geometry).

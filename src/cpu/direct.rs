@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
-use crate::cpu::frame::{mat_mul, view_position};
+use crate::cpu::frame::{mat_mul, toward_camera, view_position};
 use crate::cpu::shadow::{Shadows, shadow};
 use crate::frame::FrameUniform;
 use crate::gbuffer::GSample;
@@ -106,11 +106,7 @@ pub fn direct_and_diffuse(
             }
             let vp = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
             let world = mat_mul(&f.inv_view, vp.extend(1.0).to_array()).xyz();
-            let v = if f.ortho != 0 {
-                Vec3::from_slice(&f.inv_view[2][..3]).normalize()
-            } else {
-                (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
-            };
+            let v = toward_camera(f, world);
             let (radiance, irradiance) = lit(s, world, v, lights, shadows);
             out[p] = radiance;
             lambert[p] = (1.0 - s.metallic) * s.base_color / PI * irradiance;

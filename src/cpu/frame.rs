@@ -22,6 +22,15 @@ pub fn image_size(f: &FrameUniform) -> Vec2 {
     Vec2::new(f.width as f32, f.height as f32)
 }
 
+/// As `toward_camera` in `wgsl/shared/frame.wgsl`: the unit world direction from world point
+/// `world` towards the camera (its backward axis for an orthographic camera).
+pub fn toward_camera(f: &FrameUniform, world: Vec3) -> Vec3 {
+    if f.ortho != 0 {
+        return Vec3::from_slice(&f.inv_view[2][..3]).normalize();
+    }
+    (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
+}
+
 /// As `view_position`: the view-space point at view depth `d` through pixel coordinate `px`.
 pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
     let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);

@@ -5,10 +5,12 @@ use glam::{UVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::composite::shaded;
 use crate::cpu::direct::lit;
-use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, screen_exit, view_position};
+use crate::cpu::frame::{
+    clip_to_pixel, image_size, mat_mul, screen_exit, toward_camera, view_position,
+};
 use crate::cpu::pyramid::nearest;
 use crate::cpu::resolve::{ray_triangle, surface_sample};
-use crate::cpu::shadow::{Shadows, shadow_face_index};
+use crate::cpu::shadow::Shadows;
 use crate::environment::Environment;
 use crate::frame::{FrameUniform, PyramidLayout, ReflectionsUniform, ShadowFace};
 use crate::gbuffer::GSample;
@@ -21,6 +23,8 @@ const EDGE_FADE: f32 = 0.1;
 const UNBOUNDED: f32 = 1000.0;
 /// The ray stops this much in front of the near plane (relative).
 const NEAR_MARGIN: f32 = 1.001;
+/// `TO_SCENE_EDGE`: a followed ray's reach where the march found nothing.
+const TO_SCENE_EDGE: f32 = 3.4e38;
 /// `HIDDEN_SIDE`: the march ran into the side of a solid the camera does not see.
 const HIDDEN_SIDE: u32 = 3;
 /// Steps and bisections of a ray through the shadow maps, and the slack of its exact hit.
@@ -320,7 +324,7 @@ pub fn reflections(
                 (view_position(f, centre + 0.5, layer_depth(q, layer.min(1))) - p).length()
             });
             let follow = match hit {
-                None => 3.4e38,
+                None => TO_SCENE_EDGE,
                 Some((_, HIDDEN_SIDE, _)) => went,
                 Some((q, 0, _)) if march.silhouette(q) => -went,
                 Some(_) => 0.0,
@@ -390,6 +394,13 @@ pub fn reflections(
     out
 }
 
+/// As `RayInMap`: a one-face light's clip positions and view depths at a ray's two ends.
+struct RayInMap<'a> {
+    face: &'a ShadowFace,
+    c: [Vec4; 2],
+    z: [f32; 2],
+}
+
 /// As `reflections_hidden`: what the lights' shadow maps hold, for the rays the march could not
 /// place.
 struct Hidden<'a> {
@@ -404,10 +415,7 @@ impl Hidden<'_> {
     /// As `map_point`: how far the surface light i's map holds at p's texel lies behind p, and
     /// its triangle.
     fn map_point(&self, i: usize, p: Vec3) -> Option<(f32, u32)> {
-        let sh = self.shadows;
-        let [first, count] = sh.light_faces.get(i).copied().unwrap_or([0, 0]);
-        let light = Vec3::from(self.lights[i].position);
-        let face = &sh.faces[(first + shadow_face_index(count, p - light)) as usize];
+        let face = self.shadows.face_at(i, &self.lights[i], p)?;
         let v = mat_mul(&face.view, p.extend(1.0).to_array());
         self.map_at(face, mat_mul(&face.proj, v.to_array()), v.z)
     }
@@ -428,20 +436,32 @@ impl Hidden<'_> {
         (depth != u32::MAX).then(|| (f32::from_bits(depth) + vz, word as u32))
     }
 
-    /// As `ray_in_map` and `map_along`: light i's map at `o + d t` for t in [0, t_end], a
-    /// one-face light's clip position and view z interpolated between the ray's ends.
-    fn map_along(&self, i: usize, (o, d): (Vec3, Vec3), t: f32, t_end: f32) -> Option<(f32, u32)> {
-        let sh = self.shadows;
-        let [first, count] = sh.light_faces.get(i).copied().unwrap_or([0, 0]);
+    /// As `ray_in_map`: a one-face light's (sun, spot) clip positions and view depths of the
+    /// ray's ends `o` and `o + d t_end` (both affine in the point); `None` for a point light.
+    fn ray_in_map(&self, i: usize, (o, d): (Vec3, Vec3), t_end: f32) -> Option<RayInMap<'_>> {
+        let [first, count] = self.shadows.light_faces.get(i).copied().unwrap_or([0, 0]);
         if count != 1 {
-            return self.map_point(i, o + d * t);
+            return None;
         }
-        let face = &sh.faces[first as usize];
+        let face = &self.shadows.faces[first as usize];
         let v0 = mat_mul(&face.view, o.extend(1.0).to_array());
         let v1 = mat_mul(&face.view, (o + d * t_end).extend(1.0).to_array());
         let (c0, c1) = (mat_mul(&face.proj, v0.to_array()), mat_mul(&face.proj, v1.to_array()));
+        Some(RayInMap { face, c: [c0, c1], z: [v0.z, v1.z] })
+    }
+
+    /// As `map_along`: light i's map at `o + d t`, t in [0, t_end], interpolated along `ray`
+    /// for a one-face light.
+    fn map_along(
+        &self,
+        i: usize,
+        ray: &Option<RayInMap<'_>>,
+        (o, d): (Vec3, Vec3),
+        (t, t_end): (f32, f32),
+    ) -> Option<(f32, u32)> {
+        let Some(r) = ray else { return self.map_point(i, o + d * t) };
         let s = t / t_end;
-        self.map_at(face, c0 + (c1 - c0) * s, v0.z + (v1.z - v0.z) * s)
+        self.map_at(r.face, r.c[0] + (r.c[1] - r.c[0]) * s, r.z[0] + (r.z[1] - r.z[0]) * s)
     }
 
     fn corners(&self, id: u32) -> [usize; 3] {
@@ -490,13 +510,14 @@ impl Hidden<'_> {
             if self.shadows.light_faces.get(i).is_none_or(|lf| lf[1] == 0) {
                 continue;
             }
+            let ray = self.ray_in_map(i, (o, d), t_end);
             let (mut t0, mut front) = (0.0f32, true);
             for k in 1..=HIDDEN_STEPS {
                 let t1 = t_end * k as f32 / HIDDEN_STEPS as f32;
                 if t0 >= reach {
                     break;
                 }
-                let m = self.map_along(i, (o, d), t1, t_end);
+                let m = self.map_along(i, &ray, (o, d), (t1, t_end));
                 let behind = m.is_some_and(|(gap, _)| gap < 0.0);
                 if behind && front {
                     let (mut lo, mut hi) = (t0, t1);
@@ -504,7 +525,7 @@ impl Hidden<'_> {
                     let (mut id_hi, mut id_lo) = (id, id);
                     for _ in 0..HIDDEN_REFINE {
                         let mid = 0.5 * (lo + hi);
-                        match self.map_along(i, (o, d), mid, t_end) {
+                        match self.map_along(i, &ray, (o, d), (mid, t_end)) {
                             Some((gap, id)) if gap < 0.0 => {
                                 hi = mid;
                                 id_hi = id;
@@ -539,12 +560,7 @@ impl Hidden<'_> {
         let f = self.f;
         let [w0, w1, w2] = self.corners(id).map(|i| self.scene.positions[i]);
         let geo = (w1 - w0).cross(w2 - w0);
-        let to_camera = if f.ortho != 0 {
-            mat_mul(&f.inv_view, [0.0, 0.0, 1.0, 0.0]).xyz()
-        } else {
-            mat_mul(&f.inv_view, [0.0, 0.0, 0.0, 1.0]).xyz() - x
-        };
-        geo.dot(to_camera) * geo.dot(o - x) > 0.0
+        geo.dot(toward_camera(f, x)) * geo.dot(o - x) > 0.0
     }
 
     /// As `hidden_seen`: the hit surface lit towards o, its roughness widened by `blur`.

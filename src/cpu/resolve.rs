@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
-use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, view_position};
+use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, toward_camera, view_position};
 use crate::frame::FrameUniform;
 use crate::gbuffer::{GSample, VIS_EMPTY};
 use crate::scene::{Filter, Material, Scene, Texture, TextureRef, Wrap};
@@ -390,13 +390,7 @@ pub fn resolve_pixel_moved(
     let (origin, dir) = pixel_ray(f, x, y, d);
     let bary = ray_barycentrics(origin, dir, a, b, c);
     let world = w0 * bary.x + w1 * bary.y + w2 * bary.z;
-    let eye = mat_mul(&f.inv_view, origin.extend(1.0).to_array()).xyz();
-    let to_eye = if f.ortho != 0 {
-        mat_mul(&f.inv_view, [0.0, 0.0, 1.0, 0.0]).xyz().normalize()
-    } else {
-        (eye - world).normalize()
-    };
-    let mut s = surface_sample(scene, id, [i0, i1, i2], bary, to_eye);
+    let mut s = surface_sample(scene, id, [i0, i1, i2], bary, toward_camera(f, world));
     s.depth = stored_depth(f, d);
     let was = match previous {
         Some(last)

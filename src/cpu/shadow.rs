@@ -39,11 +39,21 @@ pub struct Shadows<'a> {
     pub pcf: u32,
 }
 
+impl Shadows<'_> {
+    /// As `shadow_face_at`: the face of light i (`light`) whose view holds world point `world`;
+    /// `None` for a light without a shadow map.
+    pub(crate) fn face_at(&self, i: usize, light: &GpuLight, world: Vec3) -> Option<&ShadowFace> {
+        let [first, count] = self.light_faces.get(i).copied().unwrap_or([0, 0]);
+        let d = world - Vec3::from(light.position);
+        (count > 0).then(|| &self.faces[(first + shadow_face_index(count, d)) as usize])
+    }
+}
+
 const SHADOW_BIAS_TEXELS: f32 = 1.0;
 const SHADOW_SLOPE_TEXELS: f32 = 2.0;
 const SHADOW_NORMAL_OFFSET_TEXELS: f32 = 1.0;
 
-pub(crate) fn shadow_face_index(count: u32, d: Vec3) -> u32 {
+fn shadow_face_index(count: u32, d: Vec3) -> u32 {
     if count < 6 {
         return 0;
     }
@@ -59,12 +69,7 @@ pub(crate) fn shadow_face_index(count: u32, d: Vec3) -> u32 {
 
 /// As `shadow` in `wgsl/direct.wgsl`: the lit fraction of the PCF taps.
 pub fn shadow(sh: &Shadows, i: usize, light: &GpuLight, world: Vec3, n: Vec3, l: Vec3) -> f32 {
-    let [first, count] = sh.light_faces.get(i).copied().unwrap_or([0, 0]);
-    if count == 0 {
-        return 1.0;
-    }
-    let f =
-        &sh.faces[(first + shadow_face_index(count, world - Vec3::from(light.position))) as usize];
+    let Some(f) = sh.face_at(i, light, world) else { return 1.0 };
     let texel = if f.ortho != 0 {
         f.texel
     } else {

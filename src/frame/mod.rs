@@ -173,6 +173,7 @@ pub const FRAME_POSITION_SCREEN_U16: u32 = 2;
 /// [`FrameUniform::flags`] bit: the G-buffer holds positions as
 /// [`PositionEncoding::ViewF16`](crate::PositionEncoding::ViewF16) would.
 pub const FRAME_POSITION_VIEW_F16: u32 = 4;
+
 impl crate::settings::PositionEncoding {
     /// Its [`FrameUniform::flags`] bits.
     pub fn frame_flags(self) -> u32 {

@@ -96,9 +96,11 @@ impl ReflectionsStage {
 impl Stage for ReflectionsStage {
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Reflections);
+        // Rays the screen cannot place follow the shadow maps, where there are some.
+        let follow = ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps;
         rec.encoder().clear_buffer(&self.tiles, 0, None);
         rec.encoder().clear_buffer(&self.output, 0, None);
-        if ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps {
+        if follow {
             rec.encoder().clear_buffer(&self.followed, 0, Some(4));
         }
         let mut pass = rec.pass(id);
@@ -118,8 +120,6 @@ impl Stage for ReflectionsStage {
         // A hit surface is shaded as the composite shades it, with the terms the frame has, and
         // lit towards the point its ray left.
         let mut defines = ctx.settings.precision.defines();
-        // Rays the screen cannot place follow the shadow maps, where there are some.
-        let follow = ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps;
         if let Some(s) = &ctx.shadows {
             defines.push("SHADOWS");
             entries.extend([

@@ -46,6 +46,15 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
 }
 
+// The unit world direction from world point `world` towards the camera (its backward axis for an
+// orthographic camera). src/cpu/frame.rs has the same.
+fn toward_camera(f: Frame, world: vec3<f32>) -> vec3<f32> {
+    if f.ortho != 0u {
+        return normalize(f.inv_view[2].xyz);
+    }
+    return normalize(f.inv_view[3].xyz - world);
+}
+
 // The pixel coordinate of clip position c (c.w > 0) on an image of `size` pixels (the camera's
 // image, or a shadow map's face): where view_position's ray through it passes.
 fn clip_to_pixel(c: vec4<f32>, size: vec2<f32>) -> vec2<f32> {

@@ -42,16 +42,21 @@ fn shadow_texel_world(f: ShadowFace, world: vec3<f32>) -> f32 {
 }
 
 #if SHADOWS
+// The face of light i (`light`, which has a shadow map) whose view holds world point `world`.
+fn shadow_face_at(i: u32, light: Light, world: vec3<f32>) -> ShadowFace {
+    let info = light_faces[i];
+    return faces[info.x + shadow_face_index(info.y, world - light.position)];
+}
+
 // The share of `light` (the i-th) that reaches the world point `world` (normal n, unit l towards
 // the light) past its shadow map, with (2 pcf + 1)^2 taps. Reads the including kernel's
 // bindings `faces` (ShadowFace per face), `light_faces` ((first face, face count) per light,
 // count 0 for a light without shadow) and `atlas` (the faces' visibility words back to back).
 fn shadow(i: u32, light: Light, world: vec3<f32>, n: vec3<f32>, l: vec3<f32>, pcf: u32) -> f32 {
-    let info = light_faces[i];
-    if info.y == 0u {
+    if light_faces[i].y == 0u {
         return 1.0;
     }
-    let f = faces[info.x + shadow_face_index(info.y, world - light.position)];
+    let f = shadow_face_at(i, light, world);
     let texel = shadow_texel_world(f, world);
     let p = world + n * (texel * SHADOW_NORMAL_OFFSET_TEXELS);
     let c = mat_mul(f.proj, mat_mul(f.view, vec4<f32>(p, 1.0)));
