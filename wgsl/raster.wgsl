@@ -623,48 +623,98 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     s.q = b.q;
     bound(&s);
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
-    let tiles = (s.hi - s.lo) / 16 + 1;
-    let tile_count = u32(tiles.x * tiles.y);
+    var w = walk_start(s, slice, b.slices, vec2<i32>(lid.xy));
     // Two loops, so that only the triangles that need the alpha test run the one that holds it.
     if ALPHA_TEST && draw_kind(b.triangle) == DRAW_TESTED {
-        for (var tile = slice; tile < tile_count; tile += b.slices) {
-            let tile_lo = s.lo + tile_origin(tile, tiles);
-            let pixel = tile_lo + vec2<i32>(lid.xy);
-            let d = large_depth(s, tl, tile_lo, pixel);
+        for (; w.tile.y < w.tiles.y; walk_next(&w)) {
+            let d = walk_depth(s, tl, w);
             if d != -1.0 {
-                fragment_tested(pixel, d, b.triangle);
+                fragment_tested(w.pixel, d, b.triangle);
             }
         }
         return;
     }
-    for (var tile = slice; tile < tile_count; tile += b.slices) {
-        let tile_lo = s.lo + tile_origin(tile, tiles);
-        let pixel = tile_lo + vec2<i32>(lid.xy);
-        let d = large_depth(s, tl, tile_lo, pixel);
+    for (; w.tile.y < w.tiles.y; walk_next(&w)) {
+        let d = walk_depth(s, tl, w);
         if d != -1.0 {
-            fragment(pixel, d, b.triangle);
+            fragment(w.pixel, d, b.triangle);
         }
     }
 }
 
-// The first pixel of tile `tile` of a triangle's `tiles` (16x16 each), from its bounds' corner.
-fn tile_origin(tile: u32, tiles: vec2<i32>) -> vec2<i32> {
-    return vec2<i32>(i32(tile % u32(tiles.x)), i32(tile / u32(tiles.x))) * 16;
+// A workgroup's walk over the tiles slice, slice + slices, ... (in row order) of a binned
+// triangle's 16x16 tiles, from one thread's view: the tile, the thread's pixel in it, and the
+// exact edge functions there. A step adds to them what the move to the next tile adds (one of two
+// moves: on along the row, or on with a wrap to the next row), so a tile costs no division and no
+// 64-bit product; integer sums are exact, so the edge functions are those of the pixel itself.
+struct Walk {
+    // The tile (across, down) and the tiles of the triangle's bounds.
+    tile: vec2<u32>,
+    tiles: vec2<u32>,
+    // Tiles across and down from one tile of the walk to the next, before a wrap.
+    step: vec2<u32>,
+    pixel: vec2<i32>,
+    // Edge functions (v1, v2), (v2, v0), (v0, v1) at the pixel's centre.
+    e0: Wide,
+    e1: Wide,
+    e2: Wide,
+    // What a step adds to them, without and with a wrap.
+    on0: Wide,
+    on1: Wide,
+    on2: Wide,
+    wrap0: Wide,
+    wrap1: Wide,
+    wrap2: Wide,
 }
 
-// The depth of binned triangle s (top-left edges tl) at `pixel` of the tile whose first pixel
-// is `tile_lo`, or -1 where the tile lies wholly outside an edge, the pixel outside the bounds,
-// or its centre uncovered.
-fn large_depth(s: Setup, tl: vec3<bool>, tile_lo: vec2<i32>, pixel: vec2<i32>) -> f32 {
-    if (TILE_TEST && tile_outside(s, tile_lo, min(tile_lo + 15, s.hi))) || !all(pixel <= s.hi) {
+// What moving (m, in 1/256 pixels) adds to the edge function of a -> b.
+fn edge_step(a: vec2<i32>, b: vec2<i32>, m: vec2<i32>) -> Wide {
+    return wide_sub(wide_mul(b.x - a.x, m.y), wide_mul(b.y - a.y, m.x));
+}
+
+fn walk_start(s: Setup, slice: u32, slices: u32, local: vec2<i32>) -> Walk {
+    var w: Walk;
+    w.tiles = vec2<u32>((s.hi - s.lo) / 16 + 1);
+    w.tile = vec2<u32>(slice % w.tiles.x, slice / w.tiles.x);
+    w.step = vec2<u32>(slices % w.tiles.x, slices / w.tiles.x);
+    w.pixel = s.lo + vec2<i32>(w.tile) * 16 + local;
+    let p = w.pixel * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
+    w.e0 = edge_wide(s.v1, s.v2, p);
+    w.e1 = edge_wide(s.v2, s.v0, p);
+    w.e2 = edge_wide(s.v0, s.v1, p);
+    let on = vec2<i32>(w.step) * (16 * SUBPIXEL);
+    let wrap = on + vec2<i32>(-i32(w.tiles.x), 1) * (16 * SUBPIXEL);
+    w.on0 = edge_step(s.v1, s.v2, on);
+    w.on1 = edge_step(s.v2, s.v0, on);
+    w.on2 = edge_step(s.v0, s.v1, on);
+    w.wrap0 = edge_step(s.v1, s.v2, wrap);
+    w.wrap1 = edge_step(s.v2, s.v0, wrap);
+    w.wrap2 = edge_step(s.v0, s.v1, wrap);
+    return w;
+}
+
+fn walk_next(w: ptr<function, Walk>) {
+    var tile = (*w).tile + (*w).step;
+    let wraps = tile.x >= (*w).tiles.x;
+    if wraps {
+        tile += vec2<u32>(0u - (*w).tiles.x, 1u);
+    }
+    (*w).pixel += vec2<i32>(tile - (*w).tile) * 16;
+    (*w).tile = tile;
+    (*w).e0 = wide_add((*w).e0, select((*w).on0, (*w).wrap0, wraps));
+    (*w).e1 = wide_add((*w).e1, select((*w).on1, (*w).wrap1, wraps));
+    (*w).e2 = wide_add((*w).e2, select((*w).on2, (*w).wrap2, wraps));
+}
+
+// The depth of binned triangle s (top-left edges tl) at the walk's pixel, or -1 where the tile
+// lies wholly outside an edge, the pixel outside the bounds, or its centre uncovered.
+fn walk_depth(s: Setup, tl: vec3<bool>, w: Walk) -> f32 {
+    let tile_lo = s.lo + vec2<i32>(w.tile) * 16;
+    if (TILE_TEST && tile_outside(s, tile_lo, min(tile_lo + 15, s.hi))) || !all(w.pixel <= s.hi) {
         return -1.0;
     }
-    let p = pixel * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
-    let e0 = edge_wide(s.v1, s.v2, p);
-    let e1 = edge_wide(s.v2, s.v0, p);
-    let e2 = edge_wide(s.v0, s.v1, p);
-    if covers_wide(e0, tl.x) && covers_wide(e1, tl.y) && covers_wide(e2, tl.z) {
-        return depth_at(vec3<f32>(wide_to_f32(e0), wide_to_f32(e1), wide_to_f32(e2)), s);
+    if covers_wide(w.e0, tl.x) && covers_wide(w.e1, tl.y) && covers_wide(w.e2, tl.z) {
+        return depth_at(vec3<f32>(wide_to_f32(w.e0), wide_to_f32(w.e1), wide_to_f32(w.e2)), s);
     }
     return -1.0;
 }

@@ -9,6 +9,10 @@ fn wide_sub(a: i64, b: i64) -> i64 {
     return a - b;
 }
 
+fn wide_add(a: i64, b: i64) -> i64 {
+    return a + b;
+}
+
 // The exact product of two i32 values.
 fn wide_mul(a: i32, b: i32) -> i64 {
     return i64(a) * i64(b);
@@ -33,6 +37,11 @@ fn wide_neg(a: vec2<u32>) -> vec2<u32> {
 
 fn wide_sub(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
     return vec2<u32>(a.x - b.x, a.y - b.y - select(0u, 1u, a.x < b.x));
+}
+
+fn wide_add(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
 }
 
 // The exact product of two i32 values.
