@@ -84,6 +84,25 @@ fn dense_gltf_matches_cpu_reference() {
     assert_matches_cpu(&engine, &camera, Settings { dz: 1.0, ..settings(96, 72) });
 }
 
+/// Tall, narrow triangles: their bounds are 1 to 5 of the 16x16 tiles across and about 15 down,
+/// so with a GPU's 8 tiles a workgroup each workgroup's walk steps past a whole row of tiles at
+/// once (slices at least the tiles across) and wraps on every step; the walk must land on the
+/// same pixels and edge values as evaluating each afresh.
+#[test]
+fn tall_triangles_walked_past_whole_rows_match_cpu_reference() {
+    let triangles: Vec<[Vec3; 3]> = [0.02f32, 0.1, 0.25]
+        .iter()
+        .enumerate()
+        .map(|(i, &w)| {
+            let x = -0.45 + 0.45 * i as f32;
+            [Vec3::new(x - w, -1.1, 0.0), Vec3::new(x + w, -1.0, 0.1), Vec3::new(x, 1.1, -0.1)]
+        })
+        .collect();
+    let scene = soup(&triangles, true);
+    let camera = Camera::perspective(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 60.0, 0.05);
+    assert_matches_cpu(&scene, &camera, settings(160, 256));
+}
+
 fn random_soup(seed: u64, count: usize, extent: f32) -> Vec<[Vec3; 3]> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let v = |r: &mut rand_chacha::ChaCha8Rng| {
