@@ -296,28 +296,28 @@ fn word_after(d: f32, t: u32, hi: u32, lo: u32) -> bool {
     return db > hi || (db == hi && t > lo);
 }
 
-fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32) -> bool {
+fn layer1_accepts(pixel: vec2<i32>, d: f32, t: u32, f: Frame) -> bool {
 #if WRITE_L1
 #if PEEL
-    let p = u32(pixel.y) * frame.width + u32(pixel.x);
+    let p = u32(pixel.y) * f.width + u32(pixel.x);
     return word_after(d, t, zref[2u * p + 1u], zref[2u * p]) && word_before(d, t, opaque[2u * p + 1u], opaque[2u * p]);
 #else
 #if REPROJECT
-    let r = reproject(frame, vec2<f32>(pixel) + 0.5, d);
+    let r = reproject(f, vec2<f32>(pixel) + 0.5, d);
     let pc = r.clip;
     if !(pc.w > 0.0) {
         return false;
     }
-    let prev = clip_to_pixel(pc, vec2<f32>(f32(frame.width), f32(frame.height)));
-    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
+    let prev = clip_to_pixel(pc, vec2<f32>(f32(f.width), f32(f.height)));
+    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(f.width) && prev.y < f32(f.height)) {
         return false;
     }
     let pp = vec2<u32>(prev);
-    let z0 = zref[2u * (pp.y * frame.width + pp.x) + 1u];
-    return z0 != VIS_EMPTY && r.depth > bitcast<f32>(z0) + frame.dz;
+    let z0 = zref[2u * (pp.y * f.width + pp.x) + 1u];
+    return z0 != VIS_EMPTY && r.depth > bitcast<f32>(z0) + f.dz;
 #else
-    let z0 = zref[2u * (u32(pixel.y) * frame.width + u32(pixel.x)) + 1u];
-    return z0 != VIS_EMPTY && d > bitcast<f32>(z0) + frame.dz;
+    let z0 = zref[2u * (u32(pixel.y) * f.width + u32(pixel.x)) + 1u];
+    return z0 != VIS_EMPTY && d > bitcast<f32>(z0) + f.dz;
 #endif
 #endif
 #else
@@ -334,18 +334,22 @@ override ALPHA_TEST: bool = true;
 
 // A fragment of a triangle that needs the alpha test: dropped where its opacity is below its
 // material's cutoff.
-fn fragment_tested(pixel: vec2<i32>, d: f32, t: u32) {
-    if ALPHA_TEST && triangle_opacity(t, vec2<f32>(pixel) + 0.5, d) < materials[tri_materials[t]].alpha_cutoff {
+fn fragment_tested(pixel: vec2<i32>, d: f32, t: u32, f: Frame) {
+    if ALPHA_TEST && triangle_opacity(f, t, vec2<f32>(pixel) + 0.5, d) < materials[tri_materials[t]].alpha_cutoff {
         return;
     }
-    fragment(pixel, d, t);
+    fragment(pixel, d, t, f);
 }
 
-fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
-    if !(d > 0.0 && d <= frame.far) {
+// A fragment's reads of the frame uniform come from `f`, which the kernel loads before its pixel
+// loops: a driver may not keep a uniform's values in registers across the loops' atomics, and
+// then reloads them for every fragment (on llvmpipe `Reproject`'s two matrices, reloaded, cost
+// it more than the rest of its layer-1 test).
+fn fragment(pixel: vec2<i32>, d: f32, t: u32, f: Frame) {
+    if !(d > 0.0 && d <= f.far) {
         return;
     }
-    let p = u32(pixel.y) * frame.width + u32(pixel.x);
+    let p = u32(pixel.y) * f.width + u32(pixel.x);
 #if COUNT
     atomicAdd(&counts[p], 1u);
 #endif
@@ -353,7 +357,7 @@ fn fragment(pixel: vec2<i32>, d: f32, t: u32) {
     vis0_write(p, d, t);
 #endif
 #if WRITE_L1
-    if layer1_accepts(pixel, d, t) {
+    if layer1_accepts(pixel, d, t, f) {
 #if UNPEELED
         atomicAdd(&bins[DIAG_UNPEELED], 1u);
 #else
@@ -383,7 +387,7 @@ fn small_depth(s: Setup, a: vec2<i32>, b: vec2<i32>, c: vec2<i32>, tl: vec3<bool
     return -1.0;
 }
 
-fn raster_small_triangle(s: Setup, t: u32, tested: bool) {
+fn raster_small_triangle(s: Setup, t: u32, tested: bool, f: Frame) {
     // Everything relative to the first pixel centre, so it fits in i32.
     let o = s.lo * SUBPIXEL + vec2<i32>(SUBPIXEL / 2);
     let a = s.v0 - o;
@@ -396,7 +400,7 @@ fn raster_small_triangle(s: Setup, t: u32, tested: bool) {
             for (var x = s.lo.x; x <= s.hi.x; x++) {
                 let d = small_depth(s, a, b, c, tl, x, y);
                 if d != -1.0 {
-                    fragment_tested(vec2<i32>(x, y), d, t);
+                    fragment_tested(vec2<i32>(x, y), d, t, f);
                 }
             }
         }
@@ -406,7 +410,7 @@ fn raster_small_triangle(s: Setup, t: u32, tested: bool) {
         for (var x = s.lo.x; x <= s.hi.x; x++) {
             let d = small_depth(s, a, b, c, tl, x, y);
             if d != -1.0 {
-                fragment(vec2<i32>(x, y), d, t);
+                fragment(vec2<i32>(x, y), d, t, f);
             }
         }
     }
@@ -519,12 +523,13 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if kind == DRAW_NONE {
         return;
     }
+    let f = frame;
     var poly: array<ClipVertex, MAX_POLY>;
     let count = clip_triangle(t, &poly);
     for (var k = 0u; k + 2u < count; k++) {
         let s = setup(t, &poly, k);
         if s.kind == 1u {
-            raster_small_triangle(s, t, kind == DRAW_TESTED);
+            raster_small_triangle(s, t, kind == DRAW_TESTED, f);
         } else if s.kind == 2u {
             bin_triangle(s, t);
         }
@@ -624,12 +629,13 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     bound(&s);
     let tl = vec3<bool>(top_left(s.v1, s.v2), top_left(s.v2, s.v0), top_left(s.v0, s.v1));
     var w = walk_start(s, slice, b.slices, vec2<i32>(lid.xy));
+    let f = frame;
     // Two loops, so that only the triangles that need the alpha test run the one that holds it.
     if ALPHA_TEST && draw_kind(b.triangle) == DRAW_TESTED {
         for (; w.tile.y < w.tiles.y; walk_next(&w)) {
             let d = walk_depth(s, tl, w);
             if d != -1.0 {
-                fragment_tested(w.pixel, d, b.triangle);
+                fragment_tested(w.pixel, d, b.triangle, f);
             }
         }
         return;
@@ -637,7 +643,7 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
     for (; w.tile.y < w.tiles.y; walk_next(&w)) {
         let d = walk_depth(s, tl, w);
         if d != -1.0 {
-            fragment(w.pixel, d, b.triangle);
+            fragment(w.pixel, d, b.triangle, f);
         }
     }
 }

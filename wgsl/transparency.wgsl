@@ -59,7 +59,7 @@ fn accumulate(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let s = sample_at(p);
     let colour = shaded(s, direct[p].rgb, 1.0, vec4<f32>(0.0), transparency.ambient);
-    let a = triangle_opacity(id, vec2<f32>(gid.xy) + 0.5, bitcast<f32>(depth_bits));
+    let a = triangle_opacity(frame, id, vec2<f32>(gid.xy) + 0.5, bitcast<f32>(depth_bits));
     var acc = accum[p];
     let w = (1.0 - acc.a) * a;
     acc = vec4<f32>(acc.rgb + w * colour, acc.a + w);
