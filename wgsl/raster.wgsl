@@ -536,6 +536,11 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
 }
 
+// The 16x16 tiles across and down that s's pixel bounds span, from their first pixel.
+fn tile_span(s: Setup) -> vec2<u32> {
+    return vec2<u32>((s.hi - s.lo) / 16 + 1);
+}
+
 // Stores s's set-up in `large` and appends its slices past the first to `items`. Without room
 // for its slices the triangle is drawn by one workgroup (slower, never lost); without room for
 // its entry it is dropped and counted.
@@ -545,8 +550,8 @@ fn bin_triangle(s: Setup, t: u32) {
         atomicAdd(&bins[1], 1u);
         return;
     }
-    let tiles = (s.hi - s.lo) / 16 + 1;
-    var slices = (u32(tiles.x * tiles.y) + TILES_PER_SLICE - 1u) / TILES_PER_SLICE;
+    let tiles = tile_span(s);
+    var slices = (tiles.x * tiles.y + TILES_PER_SLICE - 1u) / TILES_PER_SLICE;
     if slices > 1u {
         let room = arrayLength(&items);
         let base = atomicAdd(&bins[4], slices - 1u);
@@ -680,7 +685,7 @@ fn edge_step(a: vec2<i32>, b: vec2<i32>, m: vec2<i32>) -> Wide {
 
 fn walk_start(s: Setup, slice: u32, slices: u32, local: vec2<i32>) -> Walk {
     var w: Walk;
-    w.tiles = vec2<u32>((s.hi - s.lo) / 16 + 1);
+    w.tiles = tile_span(s);
     w.tile = vec2<u32>(slice % w.tiles.x, slice / w.tiles.x);
     w.step = vec2<u32>(slices % w.tiles.x, slices / w.tiles.x);
     w.pixel = s.lo + vec2<i32>(w.tile) * 16 + local;
