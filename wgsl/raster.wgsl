@@ -580,9 +580,15 @@ fn bin_args() {
     args[2] = size.z;
 }
 
-// Exact edge function of a -> b at point p (all in 1/256 pixels).
+// What moving (m, in 1/256 pixels) adds to the edge function of a -> b.
+fn edge_step(a: vec2<i32>, b: vec2<i32>, m: vec2<i32>) -> Wide {
+    return wide_sub(wide_mul(b.x - a.x, m.y), wide_mul(b.y - a.y, m.x));
+}
+
+// Exact edge function of a -> b at point p (all in 1/256 pixels): what moving from a to p adds
+// to it (edge_step), the function being 0 at a.
 fn edge_wide(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> Wide {
-    return wide_sub(wide_mul(b.x - a.x, p.y - a.y), wide_mul(b.y - a.y, p.x - a.x));
+    return edge_step(a, b, p - a);
 }
 
 fn covers_wide(e: Wide, top_left_edge: bool) -> bool {
@@ -676,11 +682,6 @@ struct Walk {
     wrap0: Wide,
     wrap1: Wide,
     wrap2: Wide,
-}
-
-// What moving (m, in 1/256 pixels) adds to the edge function of a -> b.
-fn edge_step(a: vec2<i32>, b: vec2<i32>, m: vec2<i32>) -> Wide {
-    return wide_sub(wide_mul(b.x - a.x, m.y), wide_mul(b.y - a.y, m.x));
 }
 
 fn walk_start(s: Setup, slice: u32, slices: u32, local: vec2<i32>) -> Walk {
