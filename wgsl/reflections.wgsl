@@ -311,6 +311,26 @@ struct Hit {
     xy: vec2<f32>,
 }
 
+// A reflecting sample's view-space set-up: its point, unit normal, the unit direction from the
+// eye to the point (the camera's axis for an orthographic camera) and that direction mirrored.
+struct Mirror {
+    p: vec3<f32>,
+    n: vec3<f32>,
+    v: vec3<f32>,
+    r: vec3<f32>,
+}
+
+// The mirror set-up of sample s at `pixel`: shared by the march and the followed rays.
+fn mirror_at(pixel: vec2<u32>, s: GSample) -> Mirror {
+    let p = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
+    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
+    var v = normalize(p);
+    if frame.ortho != 0u {
+        v = vec3<f32>(0.0, 0.0, -1.0);
+    }
+    return Mirror(p, n, v, reflect(v, n));
+}
+
 // Marches the ray from view-space point p (pixel `pixel`, view depth `depth`) along unit r.
 fn march(pixel: vec2<u32>, depth: f32, p: vec3<f32>, r: vec3<f32>) -> Hit {
     var hit = Hit(0u, 2u, vec2<f32>(0.0));
@@ -448,13 +468,11 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     if !(s.depth > 0.0) || !(s.reflectivity > 0.0) {
         return vec4<f32>(0.0);
     }
-    let p = view_position(frame, vec2<f32>(pixel) + 0.5, s.depth);
-    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
-    var v = normalize(p);
-    if frame.ortho != 0u {
-        v = vec3<f32>(0.0, 0.0, -1.0);
-    }
-    let r = reflect(v, n);
+    let m = mirror_at(pixel, s);
+    let p = m.p;
+    let n = m.n;
+    let v = m.v;
+    let r = m.r;
     let hit = march(pixel, s.depth, p, r);
     // What the mirror ray sees.
     var mirror = environment_view(r);
@@ -787,14 +805,9 @@ fn reflections_hidden(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
     let follow = bitcast<f32>(atomicLoad(&followed[2u + 2u * entry]));
     let s = sample_at(q);
     let gid = vec2<u32>(q % frame.width, q / frame.width);
-    let p = view_position(frame, vec2<f32>(gid) + 0.5, s.depth);
-    let n = normalize(mat_mul(frame.view, vec4<f32>(s.normal, 0.0)).xyz);
-    var v = normalize(p);
-    if frame.ortho != 0u {
-        v = vec3<f32>(0.0, 0.0, -1.0);
-    }
-    let o = mat_mul(frame.inv_view, vec4<f32>(p, 1.0)).xyz;
-    let r = normalize(mat_mul(frame.inv_view, vec4<f32>(reflect(v, n), 0.0)).xyz);
+    let m = mirror_at(gid, s);
+    let o = mat_mul(frame.inv_view, vec4<f32>(m.p, 1.0)).xyz;
+    let r = normalize(mat_mul(frame.inv_view, vec4<f32>(m.r, 0.0)).xyz);
     let reach = min(scene_exit(o, r), 1.25 * abs(follow) + params.thickness);
     let hit = hidden_hit(o, r, reach);
     if hit.t < 0.0 || (follow < 0.0 && faces_camera(hit, o + r * hit.t, o)) {

@@ -65,6 +65,25 @@ fn view_normal(f: &FrameUniform, s: &GSample) -> Vec3 {
     mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz()
 }
 
+/// As `Mirror`: a reflecting sample's view-space point, unit normal, unit direction from the eye
+/// (the camera's axis for an orthographic camera) and that direction mirrored.
+struct Mirror {
+    p: Vec3,
+    n: Vec3,
+    v: Vec3,
+    r: Vec3,
+}
+
+impl Mirror {
+    /// As `mirror_at`.
+    fn at(f: &FrameUniform, pixel: UVec2, s: &GSample) -> Self {
+        let p = view_position(f, pixel.as_vec2() + 0.5, s.depth);
+        let n = view_normal(f, s).normalize();
+        let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
+        Mirror { p, n, v, r: v - 2.0 * n.dot(v) * n }
+    }
+}
+
 /// Where a ray from `a` along `d` leaves cell `cell` of `size` pixels.
 fn cell_exit(a: Vec2, d: Vec2, cell: UVec2, size: f32) -> f32 {
     let side = |c: u32, d: f32| (c as f32 + if d > 0.0 { 1.0 } else { 0.0 }) * size;
@@ -312,10 +331,7 @@ pub fn reflections(
             {
                 continue;
             }
-            let p = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
-            let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
-            let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
-            let r = v - 2.0 * n.dot(v) * n;
+            let Mirror { p, n, v, r } = Mirror::at(f, UVec2::new(x, y), s);
             let hit = march.trace(UVec2::new(x, y), s, r);
             let (mut mirror, mut mirror_trust) = (sky(r), 0.0);
             // As the kernel's `went` and `follow`.
@@ -594,12 +610,9 @@ impl Hidden<'_> {
         let f = self.f;
         let s = &layer0[pi];
         let (x, y) = (pi as u32 % f.width, pi as u32 / f.width);
-        let p = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
-        let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
-        let v = if f.ortho != 0 { Vec3::NEG_Z } else { p.normalize() };
-        let o = mat_mul(&f.inv_view, p.extend(1.0).to_array()).xyz();
-        let rv = v - 2.0 * n.dot(v) * n;
-        let r = mat_mul(&f.inv_view, rv.extend(0.0).to_array()).xyz().normalize();
+        let m = Mirror::at(f, UVec2::new(x, y), s);
+        let o = mat_mul(&f.inv_view, m.p.extend(1.0).to_array()).xyz();
+        let r = mat_mul(&f.inv_view, m.r.extend(0.0).to_array()).xyz().normalize();
         let reach = self.scene_exit(o, r).min(1.25 * follow.abs() + self.u.thickness);
         let hit = self.hidden_hit(o, r, reach)?;
         if follow < 0.0 && self.faces_camera(hit.1, o + r * hit.0, o) {
