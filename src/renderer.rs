@@ -169,7 +169,11 @@ impl Stages {
         let pixels = u64::from(s.width) * u64::from(s.height);
         Stages {
             raster: RasterStage::new(device, int64, s.raster_work, pixels),
-            resolve: ResolveStage::new(device, pixels * gbuffer::bytes_per_pixel(s.precision)),
+            resolve: ResolveStage::new(
+                device,
+                (s.width, s.height),
+                gbuffer::bytes_per_pixel(s.precision),
+            ),
             ao: None,
             shadows: None,
             direct: DirectStage::new(device, pixels),

@@ -1,6 +1,12 @@
 // Resolve: visibility buffer -> G-buffer layer, one thread per pixel.
 // defines: PACKED
 //
+// `resolve` runs at every pixel. A frame's own layers go through a list of 8x8 tiles instead,
+// since on a driver that runs every lane of a SIMD group where one lane works (llvmpipe) a pixel
+// without a surface costs as much as one with: `resolve_tiles` lists the tiles that hold a
+// surface and writes the empty record over the others, `resolve_tiles_args` sizes the dispatch,
+// and `resolve_listed` resolves the listed tiles. The records are the same either way.
+//
 // The pixel's triangle is intersected with the ray through the pixel centre (in view space) for
 // perspective-correct barycentrics; normal, uv and position interpolate with them. The depth is
 // the visibility buffer's own, so the layer separation holds exactly in the G-buffer too.
@@ -13,6 +19,8 @@
 #include "shared/surface.wgsl"
 #include "shared/barycentric.wgsl"
 #include "shared/position.wgsl"
+#include "shared/indirect.wgsl"
+#include "shared/list.wgsl"
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
@@ -30,6 +38,9 @@
 @group(0) @binding(11) var<storage, read> tangents: array<f32>;
 // Each vertex's position in the last frame (read only with OBJECT_MOTION).
 @group(0) @binding(12) var<storage, read> previous_positions: array<f32>;
+// The pixels `resolve_listed` resolves, and its dispatch arguments (shared/list.wgsl).
+@group(0) @binding(13) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> list_args: array<u32>;
 
 fn previous_vertex(i: u32) -> vec3<f32> {
     return vec3<f32>(previous_positions[3u * i], previous_positions[3u * i + 1u], previous_positions[3u * i + 2u]);
@@ -40,13 +51,18 @@ fn previous_vertex(i: u32) -> vec3<f32> {
 // shared/texture.wgsl for why).
 override OBJECT_MOTION: bool = true;
 
+// Whether pixel p's visibility word holds a surface the resolve can shade.
+fn holds_surface(p: u32) -> bool {
+    return vis[2u * p + 1u] != VIS_EMPTY && vis[2u * p] < frame.triangle_count;
+}
+
 fn shade(pixel: vec2<u32>) -> GSample {
     let p = pixel.y * frame.width + pixel.x;
-    let id = vis[2u * p];
-    let depth_bits = vis[2u * p + 1u];
-    if depth_bits == VIS_EMPTY || id >= frame.triangle_count {
+    if !holds_surface(p) {
         return empty_sample();
     }
+    let id = vis[2u * p];
+    let depth_bits = vis[2u * p + 1u];
     let d = bitcast<f32>(depth_bits);
     let i0 = indices[3u * id];
     let i1 = indices[3u * id + 1u];
@@ -80,14 +96,72 @@ fn shade(pixel: vec2<u32>) -> GSample {
     return s;
 }
 
+fn write_record(p: u32, s: GSample) {
+    let words = gbuffer_encode(s);
+    for (var i = 0u; i < G_WORDS; i++) {
+        gbuffer[p * G_WORDS + i] = words[i];
+    }
+}
+
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
         return;
     }
-    let p = gid.y * frame.width + gid.x;
-    let words = gbuffer_encode(shade(gid.xy));
-    for (var i = 0u; i < G_WORDS; i++) {
-        gbuffer[p * G_WORDS + i] = words[i];
+    write_record(gid.y * frame.width + gid.x, shade(gid.xy));
+}
+
+// The 8x8 tiles of the image, and the pixel of tile t at offset `at` within it.
+fn tile_count() -> vec2<u32> {
+    return (vec2<u32>(frame.width, frame.height) + 7u) / 8u;
+}
+
+fn tile_pixel(t: u32, at: vec2<u32>) -> vec2<u32> {
+    let tiles = tile_count();
+    return vec2<u32>(t % tiles.x, t / tiles.x) * 8u + at;
+}
+
+// One thread per tile: lists the tiles that hold a surface and writes the empty record over the
+// others.
+@compute @workgroup_size(64)
+fn resolve_tiles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) n: vec3<u32>) {
+    let tiles = tile_count();
+    let t = gid.x + gid.y * n.x * 64u;
+    if t >= tiles.x * tiles.y {
+        return;
+    }
+    var found = false;
+    for (var i = 0u; i < 64u && !found; i++) {
+        let pixel = tile_pixel(t, vec2<u32>(i % 8u, i / 8u));
+        found = pixel.x < frame.width && pixel.y < frame.height && holds_surface(pixel.y * frame.width + pixel.x);
+    }
+    if found {
+        list_append(t);
+        return;
+    }
+    for (var i = 0u; i < 64u; i++) {
+        let pixel = tile_pixel(t, vec2<u32>(i % 8u, i / 8u));
+        if pixel.x < frame.width && pixel.y < frame.height {
+            write_record(pixel.y * frame.width + pixel.x, empty_sample());
+        }
+    }
+}
+
+// The listed tiles' count as indirect dispatch arguments, a workgroup each.
+@compute @workgroup_size(1)
+fn resolve_tiles_args() {
+    list_write_group_args();
+}
+
+// Resolves the listed tiles, one 8x8 workgroup each.
+@compute @workgroup_size(8, 8)
+fn resolve_listed(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    var t = 0u;
+    if !list_group_item(wid, &t) {
+        return;
+    }
+    let pixel = tile_pixel(t, lid.xy);
+    if pixel.x < frame.width && pixel.y < frame.height {
+        write_record(pixel.y * frame.width + pixel.x, shade(pixel));
     }
 }

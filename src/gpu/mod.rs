@@ -17,7 +17,7 @@ use wgpu::util::DeviceExt;
 use crate::{Error, Result};
 
 pub use bandwidth::{Bandwidth, measure_bandwidth};
-pub(crate) use pipeline::{Pipelines, Slot, slots};
+pub(crate) use pipeline::{Pipeline, Pipelines, Slot, slots};
 pub use timestamps::PassTiming;
 pub use timestamps::Timestamps;
 pub use traffic::PassTraffic;

@@ -1,14 +1,20 @@
 //! `wgsl/resolve.wgsl`: visibility buffer to G-buffer layer.
 
 use super::fill::Fill;
-use super::{FrameContext, Recorder, Stage};
+use super::{FrameContext, PointList, Recorder, Stage};
 use crate::SceneBuffers;
 use crate::gpu::{self, slots::resolve as slot};
 use crate::plan::PassId;
 
+/// The side of the square tiles the frame's own resolve lists (`tile_count` in
+/// wgsl/resolve.wgsl).
+const TILE: u32 = 8;
+
 /// The G-buffer layers and the kernel that fills them from the visibility buffers.
 pub(crate) struct ResolveStage {
     gbuffer: [wgpu::Buffer; 2],
+    /// Each layer's pixels that hold a surface, which its resolve runs at (wgsl/resolve.wgsl).
+    listed: [PointList; 2],
     /// The scene's vertex positions as the last frames saw them, for the motion vectors of
     /// geometry that moves.
     positions: Option<Positions>,
@@ -33,11 +39,17 @@ struct Positions {
 }
 
 impl ResolveStage {
-    /// Two layers of `bytes` bytes each.
-    pub(crate) fn new(device: &wgpu::Device, bytes: u64) -> Self {
-        let g = |label| gpu::storage_buffer(device, label, bytes, wgpu::BufferUsages::empty());
+    /// Two layers of `width` x `height` records of `record` bytes each.
+    pub(crate) fn new(device: &wgpu::Device, (width, height): (u32, u32), record: u64) -> Self {
+        let pixels = u64::from(width) * u64::from(height);
+        let g = |label| {
+            gpu::storage_buffer(device, label, pixels * record, wgpu::BufferUsages::empty())
+        };
+        let tiles = u64::from(width.div_ceil(TILE)) * u64::from(height.div_ceil(TILE));
+        let list = |label| PointList::new(device, label, tiles);
         ResolveStage {
             gbuffer: [g("deep-gbuffer.resolve.layer0"), g("deep-gbuffer.resolve.layer1")],
+            listed: [list("deep-gbuffer.resolve.list0"), list("deep-gbuffer.resolve.list1")],
             positions: None,
         }
     }
@@ -124,12 +136,44 @@ impl Stage for ResolveStage {
 
     fn record(&self, id: &PassId, ctx: &FrameContext<'_>, rec: &mut Recorder<'_>) {
         debug_assert_eq!(*id, PassId::Resolve);
+        let layers = ctx.plan.layers as usize;
+        for list in self.listed.iter().take(layers) {
+            list.clear(rec.encoder());
+        }
         let mut pass = rec.pass(id);
         let vis = [ctx.raster.vis0(), ctx.raster.vis1()];
-        for (vis, gbuffer) in vis.into_iter().zip(&self.gbuffer).take(ctx.plan.layers as usize) {
-            resolve_layer(ctx, &mut pass, vis, gbuffer, None);
+        for ((vis, gbuffer), list) in
+            vis.into_iter().zip(&self.gbuffer).zip(&self.listed).take(layers)
+        {
+            resolve_listed(ctx, &mut pass, vis, gbuffer, list);
         }
     }
+}
+
+/// Records the resolve of visibility buffer `vis` into the G-buffer layer `gbuffer` over the 8x8
+/// tiles that hold a surface, listed in `list` first (cleared before; the other tiles get the
+/// empty record): the same records as [`resolve_layer`], without the cost of the empty tiles on
+/// a driver that runs a SIMD group's idle lanes.
+fn resolve_listed(
+    ctx: &FrameContext<'_>,
+    pass: &mut wgpu::ComputePass<'_>,
+    vis: &wgpu::Buffer,
+    gbuffer: &wgpu::Buffer,
+    PointList { list, args }: &PointList,
+) {
+    let kernel = |entry| resolve_pipeline(ctx, entry);
+    let (w, h) = ctx.size();
+    let tiles = w.div_ceil(TILE) * h.div_ceil(TILE);
+    let listing = [(slot::FRAME, ctx.frame), (slot::VIS, vis), (slot::GBUFFER, gbuffer)];
+    let listing = [&listing[..], &[(slot::LIST, list)]].concat();
+    let groups = gpu::dispatch_size(tiles.div_ceil(64));
+    kernel("resolve_tiles").dispatch(ctx.device, pass, &listing, groups);
+    let count = [(slot::LIST, list), (slot::LIST_ARGS, args)];
+    kernel("resolve_tiles_args").dispatch(ctx.device, pass, &count, (1, 1));
+    // Not `args`: a dispatch may not read its indirect buffer as storage.
+    let mut entries = resolve_entries(ctx, (ctx.frame, vis, gbuffer));
+    entries.push((slot::LIST, list));
+    kernel("resolve_listed").dispatch_indirect(ctx.device, pass, &entries, args, 0);
 }
 
 /// Records the resolve of visibility buffer `vis` into the G-buffer layer `gbuffer`, over the
@@ -154,16 +198,32 @@ pub(crate) fn resolve_view(
     gbuffer: &wgpu::Buffer,
     args: Option<&wgpu::Buffer>,
 ) {
+    let pipeline = resolve_pipeline(ctx, "resolve");
+    let entries = resolve_entries(ctx, (frame, vis, gbuffer));
+    match args {
+        Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
+        None => pipeline.dispatch_pixels(ctx.device, pass, &entries, size),
+    }
+}
+
+/// The resolve kernel's entry point `entry`, built for the frame: the texture code only where
+/// the scene's materials may sample textures, the last frame's vertices only where the geometry
+/// moved (wgsl/resolve.wgsl), the position encoding in use alone (wgsl/shared/position.wgsl).
+fn resolve_pipeline(ctx: &FrameContext<'_>, entry: &'static str) -> std::sync::Arc<gpu::Pipeline> {
     let defines = ctx.settings.precision.defines();
-    // The texture code only where the scene's materials may sample textures, the last frame's
-    // vertices only where the geometry moved (wgsl/resolve.wgsl), the position encoding in use
-    // alone (wgsl/shared/position.wgsl).
     let constants = [
         super::textures_constant(ctx.scene),
         ("OBJECT_MOTION", f64::from(u8::from(ctx.previous_positions.is_some()))),
         ("POSITION_FLAGS", f64::from(ctx.settings.position.frame_flags())),
     ];
-    let pipeline = ctx.pipelines.get(ctx.device, "resolve", "resolve", &defines, &constants);
+    ctx.pipelines.get(ctx.device, "resolve", entry, &defines, &constants)
+}
+
+/// The buffers a resolve of `vis` into `gbuffer` reads, for the view of uniform `frame`.
+fn resolve_entries<'a>(
+    ctx: &FrameContext<'a>,
+    (frame, vis, gbuffer): (&'a wgpu::Buffer, &'a wgpu::Buffer, &'a wgpu::Buffer),
+) -> Vec<(gpu::Slot, &'a wgpu::Buffer)> {
     let positions = &ctx.scene.buffers().positions;
     let mut entries = vec![
         (slot::FRAME, frame),
@@ -172,8 +232,5 @@ pub(crate) fn resolve_view(
         (slot::PREVIOUS_POSITIONS, ctx.previous_positions.unwrap_or(positions)),
     ];
     entries.extend(super::surface_entries!(slot, ctx.scene));
-    match args {
-        Some(args) => pipeline.dispatch_indirect(ctx.device, pass, &entries, args, 0),
-        None => pipeline.dispatch_pixels(ctx.device, pass, &entries, size),
-    }
+    entries
 }
