@@ -3,7 +3,7 @@
 mod common;
 
 use approx::assert_abs_diff_eq;
-use common::{GBUFFER_FIXTURES, fixture, gpu, render};
+use common::{GBUFFER_FIXTURES, fixture, gpu, render, render_frames};
 use deep_gbuffer::cpu::resolve as cpu;
 use deep_gbuffer::{Filter, GSample, Precision, Scene, Settings, Wrap};
 use glam::Vec3;
@@ -479,4 +479,33 @@ fn position_error_over_the_depth_range() {
             }
         }
     }
+}
+
+/// A frame's own resolve runs over the 8x8 tiles that hold a surface and writes the empty record
+/// over the others: after the camera turns until background shows where the box was, every
+/// pixel of either layer without a surface holds the empty record again, not the frame before's,
+/// on an image whose sides are not multiples of 8 (tiles cut by both edges).
+#[test]
+fn pixels_left_without_a_surface_hold_the_empty_record() {
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let turned = camera.orbited(75.0);
+    let settings = Settings { timings: false, layers: 2, ..Settings::with_size(37, 29) };
+    let g = gpu();
+    let before = render(&scene, &camera, settings.clone());
+    let after = render_frames(&scene, &[camera, turned], settings);
+    let mut uncovered = 0;
+    for layer in 0..2 {
+        let was = before.renderer.read_gbuffer(&g.device, &g.queue, layer).unwrap();
+        let now = after.renderer.read_gbuffer(&g.device, &g.queue, layer).unwrap();
+        let vis = if layer == 0 { &after.vis0 } else { &after.vis1 };
+        let reference = cpu::resolve(&after.frame, &scene, vis);
+        for (p, ((a, b), w)) in now.samples.iter().zip(&reference).zip(&was.samples).enumerate() {
+            if b.depth == 0.0 {
+                assert_eq!(a, b, "layer {layer} pixel {p}: the empty record");
+                uncovered += usize::from(w.depth > 0.0);
+            }
+        }
+    }
+    assert!(uncovered > 20, "the turn uncovers pixels that held a surface ({uncovered})");
 }

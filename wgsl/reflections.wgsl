@@ -48,6 +48,7 @@
 #include "shared/shade.wgsl"
 #include "shared/lit.wgsl"
 #include "shared/indirect.wgsl"
+#include "shared/list.wgsl"
 
 // A followed ray's reach where the march found nothing: to the scene's edge.
 const TO_SCENE_EDGE: f32 = 3.4e38;
@@ -102,9 +103,10 @@ struct Reflections {
 @group(0) @binding(13) var<storage, read> light_faces: array<vec2<u32>>;
 @group(0) @binding(14) var<storage, read> atlas: array<vec2<u32>>;
 #endif
-// [0]: listed tiles; then the tile indices.
-@group(0) @binding(6) var<storage, read_write> tiles: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> args: array<u32>;
+// The reflective tiles (shared/list.wgsl: [0] their count, then the tile indices) and the
+// march's dispatch arguments, a workgroup a tile.
+@group(0) @binding(6) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> list_args: array<u32>;
 @group(0) @binding(8) var<storage, read_write> reflections: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read> environment_map: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> nearest: array<f32>;
@@ -183,17 +185,13 @@ fn reflections_classify(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
         }
     }
     if any_reflective {
-        let slot = atomicAdd(&tiles[0], 1u);
-        atomicStore(&tiles[1u + slot], tile);
+        list_append(tile);
     }
 }
 
 @compute @workgroup_size(1)
 fn reflections_args() {
-    let size = indirect_size(atomicLoad(&tiles[0]));
-    args[0] = size.x;
-    args[1] = size.y;
-    args[2] = size.z;
+    list_write_group_args();
 }
 
 // The screen position (pixels) of view-space point q; q lies in front of the camera.
@@ -562,11 +560,10 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
 
 @compute @workgroup_size(8, 8)
 fn reflections_march(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
-    let entry = indirect_group(wid);
-    if entry >= atomicLoad(&tiles[0]) {
+    var tile = 0u;
+    if !list_group_item(wid, &tile) {
         return;
     }
-    let tile = atomicLoad(&tiles[1u + entry]);
     let pixel = vec2<u32>(tile % params.tiles_x, tile / params.tiles_x) * 8u + lid.xy;
     if pixel.x >= frame.width || pixel.y >= frame.height {
         return;

@@ -38,7 +38,7 @@
 @group(0) @binding(11) var<storage, read> tangents: array<f32>;
 // Each vertex's position in the last frame (read only with OBJECT_MOTION).
 @group(0) @binding(12) var<storage, read> previous_positions: array<f32>;
-// The pixels `resolve_listed` resolves, and its dispatch arguments (shared/list.wgsl).
+// The tiles `resolve_listed` resolves, and its dispatch arguments (shared/list.wgsl).
 @group(0) @binding(13) var<storage, read_write> list: array<atomic<u32>>;
 @group(0) @binding(14) var<storage, read_write> list_args: array<u32>;
 

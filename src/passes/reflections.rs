@@ -2,7 +2,7 @@
 //! only.
 
 use super::pyramid::{Pyramid, PyramidKind};
-use super::{FrameContext, Recorder, Stage};
+use super::{FrameContext, PointList, Recorder, Stage};
 use crate::SceneBuffers;
 use crate::frame::ReflectionsUniform;
 use crate::gpu::{self, slots::reflections as slot};
@@ -16,8 +16,7 @@ pub(crate) struct ReflectionsStage {
     uniform: wgpu::Buffer,
     pyramid: Pyramid,
     nearest: wgpu::Buffer,
-    tiles: wgpu::Buffer,
-    args: wgpu::Buffer,
+    tiles: PointList,
     output: wgpu::Buffer,
     /// The rays followed through the shadow maps (a count, then pixel and distance per ray) and
     /// the indirect arguments of the kernel that follows them.
@@ -44,12 +43,11 @@ impl ReflectionsStage {
                 device,
                 "deep-gbuffer.reflections",
             ),
-            tiles: storage(
+            tiles: PointList::new(
+                device,
                 "deep-gbuffer.reflections.tiles",
-                (u64::from(tiles_x * tiles_y) + 1) * 4,
-                none,
+                u64::from(tiles_x * tiles_y),
             ),
-            args: storage("deep-gbuffer.reflections.args", 16, wgpu::BufferUsages::INDIRECT),
             output: storage("deep-gbuffer.reflections.output", pixels * 16, none),
             followed: storage("deep-gbuffer.reflections.followed", pixels * 8 + 4, none),
             hidden_args: storage(
@@ -98,7 +96,7 @@ impl Stage for ReflectionsStage {
         debug_assert_eq!(*id, PassId::Reflections);
         // Rays the screen cannot place follow the shadow maps, where there are some.
         let follow = ctx.shadows.is_some() && ctx.settings.reflections.shadow_maps;
-        rec.encoder().clear_buffer(&self.tiles, 0, None);
+        self.tiles.clear(rec.encoder());
         rec.encoder().clear_buffer(&self.output, 0, None);
         if follow {
             rec.encoder().clear_buffer(&self.followed, 0, Some(4));
@@ -111,8 +109,8 @@ impl Stage for ReflectionsStage {
             (slot::GBUFFER, ctx.gbuffer[0]),
             (slot::GBUFFER1, ctx.gbuffer[1]),
             (slot::LIGHTS, ctx.scene.light_buffer()),
-            (slot::TILES, &self.tiles),
-            (slot::ARGS, &self.args),
+            (slot::LIST, &self.tiles.list),
+            (slot::LIST_ARGS, &self.tiles.args),
             (slot::REFLECTIONS, &self.output),
             (slot::ENVIRONMENT_MAP, ctx.environment.unwrap_or(&self.no_environment)),
             (slot::NEAREST, &self.nearest),
@@ -149,7 +147,13 @@ impl Stage for ReflectionsStage {
         let groups = gpu::dispatch_size((self.tiles_x * self.tiles_y).div_ceil(64));
         get("reflections_classify").dispatch(ctx.device, &mut pass, &entries, groups);
         get("reflections_args").dispatch(ctx.device, &mut pass, &entries, (1, 1));
-        get("reflections_march").dispatch_indirect(ctx.device, &mut pass, &entries, &self.args, 0);
+        get("reflections_march").dispatch_indirect(
+            ctx.device,
+            &mut pass,
+            &entries,
+            &self.tiles.args,
+            0,
+        );
         if follow {
             get("reflections_hidden_args").dispatch(ctx.device, &mut pass, &entries, (1, 1));
             let args = &self.hidden_args;

@@ -13,7 +13,7 @@ const TILE: u32 = 8;
 /// The G-buffer layers and the kernel that fills them from the visibility buffers.
 pub(crate) struct ResolveStage {
     gbuffer: [wgpu::Buffer; 2],
-    /// Each layer's pixels that hold a surface, which its resolve runs at (wgsl/resolve.wgsl).
+    /// Each layer's 8x8 tiles that hold a surface, which its resolve runs over (wgsl/resolve.wgsl).
     listed: [PointList; 2],
     /// The scene's vertex positions as the last frames saw them, for the motion vectors of
     /// geometry that moves.
