@@ -105,6 +105,9 @@ struct SweepArgs {
     /// Layer-1 gather tap counts to sweep (0: none).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_layer1_samples))]
     radiosity_layer1_samples: Vec<u32>,
+    /// Radiosity slices a frame with the temporal history gathers, to sweep (0: all).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_history_slices))]
+    radiosity_history_slices: Vec<u32>,
     /// Layer counts to sweep (1, 2).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().layers))]
     layers: Vec<u32>,
@@ -215,10 +218,11 @@ struct TruthArgs {
     /// Equirectangular EXR that missed rays see (reflections, full; else the scene's ambient).
     #[arg(long)]
     environment: Option<PathBuf>,
-    /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
-    /// Degrees the camera turned about its target (around its up axis) since the frame before:
-    /// with --shutter above 0, `--effect full` is traced over the open shutter (the camera moving
-    /// from the one before to this one), and --compare renders the frame before, then this one.
+    /// Degrees the camera turned about its target (around its up axis) since the frame before,
+    /// and each frame before that: with --shutter above 0, `--effect full` is traced over the
+    /// open shutter (the camera moving from the one before to this one), and --compare's frames
+    /// look from where the camera was, the last from this camera (a camera orbiting at that
+    /// speed).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     turn: f32,
     /// The triangles of a material (by name or index) moved by DX,DY,DZ since the frame before,
@@ -227,6 +231,7 @@ struct TruthArgs {
     /// (the material back by the offset), then this one.
     #[arg(long = "move", value_parser = parse_move, allow_hyphen_values = true)]
     moving: Option<(String, Vec3)>,
+    /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
     #[arg(long, default_value_t = 1)]
     frames: u32,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
@@ -298,6 +303,10 @@ struct RadiosityArgs {
     /// Slices per pixel of the slices gather [default: 2].
     #[arg(long)]
     radiosity_slices: Option<u32>,
+    /// Slices the slices gather takes in a frame that has the temporal history (they turn every
+    /// frame; a first frame takes all), 0 to 16 (0: all) [default: 0].
+    #[arg(long)]
+    radiosity_history_slices: Option<u32>,
     /// Taps per layer-1 point of the gather that lets surfaces the camera does not see pass on
     /// the light they receive in the next frame's bounce, 0 to 256 (0: none) [default: 8].
     #[arg(long)]
@@ -333,6 +342,7 @@ impl RadiosityArgs {
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
         r.layer1_samples = self.radiosity_layer1_samples.unwrap_or(r.layer1_samples);
+        r.history_slices = self.radiosity_history_slices.unwrap_or(r.history_slices);
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
         r.damping = self.damping.unwrap_or(r.damping);
@@ -749,17 +759,17 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
                 message: "0 (at least one)".into(),
             });
         }
-        // With a turn the frames before the last look from where the camera was, and with a
-        // move they see the material where it was.
+        // With a turn the frames before the last look from where the camera was, a turn
+        // further back each, and with a move they see the material where it was.
         for frame in 0..args.frames {
             let last = frame + 1 == args.frames;
-            let at = if last || args.turn == 0.0 { &camera } else { &before };
+            let at = camera.orbited(-args.turn * (args.frames - 1 - frame) as f32);
             if let Some(positions) = &positions_before {
                 let now = if last { &scene.positions } else { positions };
                 buffers.write_positions(&gpu.queue, now)?;
                 renderer.geometry_changed();
             }
-            renderer.render(&gpu.device, &gpu.queue, &buffers, at)?;
+            renderer.render(&gpu.device, &gpu.queue, &buffers, &at)?;
         }
         let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
         let (estimate, effect, what) = match args.effect {
@@ -873,6 +883,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_samples: args.radiosity_samples,
         radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,
+        radiosity_history_slices: args.radiosity_history_slices,
         layers: args.layers,
         precision: args.precision,
         position: args.position_encoding,

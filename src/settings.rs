@@ -405,6 +405,16 @@ pub struct RadiositySettings {
     /// the screen's top, a side turned to the light and away from the camera. Runs with the
     /// shadow maps (`radiosity.offscreen`), and only where some light casts shadows.
     pub offscreen: bool,
+    /// Slices a `slices` gather takes in a frame that has the temporal filter's history (0 or
+    /// [`slices`](Self::slices) and above: all of them), each with the same steps a side, in
+    /// the layer-1 gather too. The slices turn every frame ([`jitter`](Self::jitter); without
+    /// it every frame takes them all), so the history holds the light the others would find,
+    /// and the gather costs `history_slices / slices` of its time on every frame but a first
+    /// one, whose gather takes all. The temporal filter averages over about
+    /// `(1 + alpha) / (1 - alpha)` frames (12 at the default alpha) before a still view
+    /// settles: the mean is the same, and the noise left in the filtered light that of
+    /// `slices / history_slices` times fewer taps (README, "Slices a frame").
+    pub history_slices: u32,
 }
 
 /// How the radiosity pass gathers irradiance from what the layers show (`wgsl/radiosity.wgsl`).
@@ -493,6 +503,7 @@ impl Default for RadiositySettings {
             downsample: 1,
             layer1_samples: 8,
             offscreen: true,
+            history_slices: 0,
         }
     }
 }
@@ -510,6 +521,25 @@ impl RadiositySettings {
         }
         // A float-to-integer cast saturates.
         (1e-3f32.ln() / c.ln()).ceil() as u32
+    }
+
+    /// The slices and taps of a frame's gathers (the `slices` of the pixel gather, its taps and
+    /// the layer-1 gather's): all of them without the `history`, else
+    /// [`history_slices`](Self::history_slices) of the slices with the same steps a side.
+    pub fn frame_taps(&self, history: bool) -> (u32, u32, u32) {
+        let all = (self.slices, self.samples, self.layer1_samples);
+        let some = self.history_slices;
+        if !history
+            || !self.jitter
+            || self.estimator != RadiosityEstimator::Slices
+            || some == 0
+            || some >= self.slices
+        {
+            return all;
+        }
+        // The kernels take max(taps / (2 slices), 1) steps a side.
+        let taps = |t: u32| if t == 0 { 0 } else { (t / (2 * self.slices)).max(1) * 2 * some };
+        (some, taps(self.samples), taps(self.layer1_samples))
     }
 
     /// The most frames a still view's filter averages over (its history weight stops at
@@ -556,6 +586,12 @@ impl RadiositySettings {
             return Err(Error::setting(
                 "radiosity.samples",
                 format!("{} (must be 1 to 256)", self.samples),
+            ));
+        }
+        if self.history_slices > 16 {
+            return Err(Error::setting(
+                "radiosity.history_slices",
+                format!("{} (must be 0 to 16)", self.history_slices),
             ));
         }
         if self.layer1_samples > 256 {

@@ -123,6 +123,57 @@ fn first_frame_against_cpu(radiosity: RadiositySettings) {
     assert!(lit > raw.len() / 2, "the box receives indirect light ({lit})");
 }
 
+/// With the history a frame gathers `history_slices` of the slices, each with the steps a side
+/// all of them take (the layer-1 gather too); a first frame, slices that do not turn or the
+/// spiral take them all. The second frame's gather against the CPU's with that frame's taps, and
+/// not with all of them.
+#[test]
+fn a_frame_with_history_gathers_its_history_slices() {
+    // The gather alone, as `settings` sets it.
+    let radiosity = RadiositySettings { history_slices: 1, offscreen: false, ..Default::default() };
+    assert_eq!(radiosity.frame_taps(false), (2, 32, 8), "a first frame takes every slice");
+    assert_eq!(radiosity.frame_taps(true), (1, 16, 4), "one slice of two, 8 and 2 steps a side");
+    let fixed = RadiositySettings { jitter: false, ..radiosity.clone() };
+    assert_eq!(fixed.frame_taps(true), (2, 32, 8), "slices that do not turn are all taken");
+    let spiral = RadiositySettings { estimator: RadiosityEstimator::Spiral, ..radiosity.clone() };
+    assert_eq!(spiral.frame_taps(true), (2, 32, 8), "the spiral has no slices");
+    let four = RadiositySettings { slices: 4, samples: 64, history_slices: 3, ..radiosity.clone() };
+    assert_eq!(four.frame_taps(true), (3, 48, 6));
+    for all in [0, 2, 5] {
+        let r = RadiositySettings { history_slices: all, ..radiosity.clone() };
+        assert_eq!(r.frame_taps(true), (2, 32, 8), "{all}: every slice");
+    }
+    let too_many = RadiositySettings { history_slices: 17, ..radiosity.clone() };
+    let e = too_many.validate().unwrap_err().to_string();
+    assert!(e.contains("radiosity.history_slices"), "{e}");
+
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let (w, h) = (64, 48);
+    let camera = scene.camera_or_default();
+    let settings = Settings { radiosity: radiosity.clone(), ..settings(w, h) };
+    let r = render_frames(&scene, &[camera.clone(), camera], settings);
+    let g = gpu();
+    let layers = [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
+    let buffers = r.renderer.radiosity_buffers().expect("radiosity runs");
+    let source = read_source(buffers.source);
+    let raw = read4(&r.renderer, buffers.gathered);
+    let layout = PyramidLayout::new(w, h);
+    let far = |a: &Vec4, e: &Vec4| {
+        (*a - *e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
+    };
+    // The second frame has the history and the slices' first turn.
+    let gather = |settings: &RadiositySettings| {
+        let uniform = RadiosityUniform::new(settings, &layout, true, 1);
+        cpu::gather(&r.frame, &uniform, [&layers[0], &layers[1]], &source, &layout, (0, 0))
+    };
+    let expected = gather(&radiosity);
+    assert_few_differ(&raw, &expected, RADIOSITY_FLIPPED_FRACTION, far, "one slice of two");
+    let every = gather(&RadiositySettings { history_slices: 0, ..radiosity.clone() });
+    let differ = raw.iter().zip(&every).filter(|(a, e)| far(a, e)).count();
+    eprintln!("{differ} of {} pixels differ from the gather over both slices", raw.len());
+    assert!(differ > raw.len() / 4, "{differ} of {} differ from both slices' gather", raw.len());
+}
+
 /// The first frame of `renderer` (no history) against the CPU reference computed on `layers`:
 /// the gather source (depths, and B of layer 0 from the GPU's own direct radiance), its levels,
 /// then the gather. Returns the GPU's gathered irradiance and confidence.

@@ -142,10 +142,15 @@ mirrored!(
 impl RadiosityUniform {
     /// The constants for `s` over a gather source of `layout`; `history` tells whether the
     /// previous frame may be used, `turn` the frame count since the history began.
+    ///
+    /// With the history, a `slices` gather that turns every frame gathers
+    /// [`RadiositySettings::history_slices`] of its slices (each with the same steps a side, in
+    /// both gathers): the temporal filter holds the others' light from the frames before.
     pub fn new(s: &RadiositySettings, layout: &PyramidLayout, history: bool, turn: u32) -> Self {
+        let (slices, samples, layer1_samples) = s.frame_taps(history);
         RadiosityUniform {
             radius: s.radius,
-            samples: s.samples,
+            samples,
             damping: s.damping,
             alpha: s.alpha,
             tolerance: s.history_tolerance,
@@ -158,7 +163,7 @@ impl RadiosityUniform {
             },
             boost_unsaturated: s.boost.unsaturated,
             boost_saturated: s.boost.saturated,
-            slices: s.slices,
+            slices,
             thickness: s.thickness * s.radius,
             estimator: match s.estimator {
                 RadiosityEstimator::Spiral => 0,
@@ -166,7 +171,7 @@ impl RadiosityUniform {
             },
             levels: layout.levels.len().min(8) as u32,
             mip_offset: s.mip_offset,
-            layer1_samples: s.layer1_samples,
+            layer1_samples,
             _pad: [0; 3],
             offsets: level_offsets(layout),
         }
