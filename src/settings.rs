@@ -363,9 +363,10 @@ pub struct RadiositySettings {
     /// Weight alpha in [0, 1) of the history in the temporal filter. A view that stands still
     /// averages longer once its bounces have settled ([`history_weight`](Self::history_weight)).
     pub alpha: f32,
-    /// History is kept where the reprojected point lies within this distance (scene units,
-    /// along the previous view axis) of the previous layer 0, whose irradiance the history
-    /// holds (a point hidden last frame has no history).
+    /// History is kept where the previous layer 0 (whose irradiance the history holds) lies
+    /// within this distance (scene units, along the previous view axis) of the point's surface
+    /// at the centre of the pixel the point fell in: its tangent plane there, as far as a
+    /// surface at that slope runs from the point (a point hidden last frame has no history).
     pub history_tolerance: f32,
     /// Take a surface's outgoing light only where it faces the gathering point (w.n_Y < 0).
     /// `spiral`: other taps do not count. `slices`: a surface facing away still hides what lies

@@ -167,13 +167,7 @@ fn unheld(world: vec3<f32>, n: vec3<f32>) -> f32 {
 // same surface: two pixels' footprint times the surface's slope to the view ray (at most 10),
 // and a thousandth of the depth for rounding.
 fn held_tolerance(v: vec3<f32>, n: vec3<f32>, z: f32) -> f32 {
-    var ray = vec3<f32>(0.0, 0.0, -1.0);
-    if frame.ortho == 0u {
-        ray = normalize(v);
-    }
-    let cos_v = clamp(abs(dot(normalize(n), ray)), 0.0995, 1.0);
-    let slope = sqrt(1.0 - cos_v * cos_v) / cos_v;
-    return 2.0 * slope / pixels_per_unit(frame, max(z, 1e-6)) + 1e-3 * z;
+    return depth_slope_span(frame, v, n, 2.0) + 1e-3 * z;
 }
 
 var<workgroup> shared_flux: array<vec4<f32>, 64>;

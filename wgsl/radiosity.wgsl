@@ -61,9 +61,9 @@
 // a pixel that saw little but bright light next to one that saw much dim light would otherwise
 // read as much bright light).
 // radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha (irradiance and coverage alike) where
-//   the reprojected point lies within
-//   `tolerance` (view depth, scene units) of the previous frame's layer 0; otherwise E. The
-//   history holds layer 0's irradiance only, so a point that was hidden (in layer 1, or not at
+//   the previous frame's layer 0 at the pixel the point fell in lies within `tolerance` (view
+//   depth, scene units) of the point's surface at that pixel's centre (depth_at); otherwise E.
+//   The history holds layer 0's irradiance only, so a point that was hidden (in layer 1, or not at
 //   all) has none: taking the layer-0 value there would paint the surface that covered it.
 //   Non-finite values never enter the history.
 // src/cpu/radiosity.rs is the same on the CPU.
@@ -189,9 +189,19 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.0e38));
 }
 
-// Where the point of sample s at `pixel` was in the previous frame: its pixel (false when off
-// the screen, when there is no history or no point) and its view depth `d` there.
-fn previous_point(pixel: vec2<u32>, s: GSample, at: ptr<function, vec2<u32>>, d: ptr<function, f32>) -> bool {
+// Where the point of a sample was in the previous frame.
+struct Previous {
+    // Its position in the previous frame's pixels, and the pixel it fell in.
+    px: vec2<f32>,
+    at: vec2<u32>,
+    // The point and its normal in the previous frame's view space.
+    v: vec3<f32>,
+    n: vec3<f32>,
+}
+
+// Where the point of sample s at `pixel` was in the previous frame (false when off the screen,
+// when there is no history or no point).
+fn previous_point(pixel: vec2<u32>, s: GSample, out: ptr<function, Previous>) -> bool {
     if params.history == 0u || !(s.depth > 0.0) {
         return false;
     }
@@ -199,24 +209,40 @@ fn previous_point(pixel: vec2<u32>, s: GSample, at: ptr<function, vec2<u32>>, d:
     if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
         return false;
     }
-    *at = vec2<u32>(prev);
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
-    *d = -mat_mul(frame.prev_view, world).z;
+    let v = mat_mul(frame.prev_view, world).xyz;
+    let n = mat_mul(frame.prev_view, vec4<f32>(s.normal, 0.0)).xyz;
+    *out = Previous(prev, vec2<u32>(prev), v, n);
     return true;
+}
+
+// The view depth the surface of point p had at pixel centre `centre` of the previous frame: where
+// that pixel's ray meets p's tangent plane, moved from p's own depth by no more than a slanted
+// surface runs over their distance (depth_slope_span: the slope at most 10; the rays taken with
+// this frame's projection). A pixel's depth belongs to its centre, up to sqrt(1/2) pixel from the
+// point: held against the point's own depth, a floor seen at a slant lost its history at every
+// turn of the camera (README, "Slanted surfaces keep their history"), and held against any depth
+// within that run, a surface uncovered beside one that moved away could take its history.
+fn depth_at(p: Previous, centre: vec2<f32>) -> f32 {
+    let o = view_position(frame, centre, 0.0);
+    let dir = view_position(frame, centre, 1.0) - o;
+    let own = -p.v.z;
+    let t = dot(p.v - o, p.n) / dot(dir, p.n);
+    let span = depth_slope_span(frame, p.v, p.n, length(centre - p.px));
+    return own + select(0.0, clamp(t - own, -span, span), abs(t) <= 3.0e38);
 }
 
 // The previous frame's filtered history at the layer-0 point of `pixel`: the irradiance found
 // (rgb) and the share of the hemisphere it covers (a); `valid` tells whether there is one.
 fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<f32> {
     *valid = false;
-    var prev = vec2<u32>(0u);
-    var d = 0.0;
-    if !previous_point(pixel, s, &prev, &d) {
+    var p: Previous;
+    if !previous_point(pixel, s, &p) {
         return vec4<f32>(0.0);
     }
-    let q = prev.y * frame.width + prev.x;
+    let q = p.at.y * frame.width + p.at.x;
     let z0 = prev_vis0[2u * q + 1u];
-    let near0 = z0 != VIS_EMPTY && abs(d - bitcast<f32>(z0)) <= params.tolerance;
+    let near0 = z0 != VIS_EMPTY && abs(depth_at(p, vec2<f32>(p.at) + 0.5) - bitcast<f32>(z0)) <= params.tolerance;
     let h = history_in[q];
     if !near0 || !finite3(h.rgb) || !(h.a >= 0.0 && h.a <= 1.0) {
         return vec4<f32>(0.0);
@@ -227,16 +253,16 @@ fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<
 
 // The last frame's layer-1 gather at the layer-1 point of `pixel` (sample s), spread over the
 // hemisphere (E / c): read at the texel of level LEVEL over the point's last pixel, and only
-// where that texel's point lay within `tolerance` of it (0 elsewhere).
+// where that texel's point lay within `tolerance` of the point's surface there (0 elsewhere).
 fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
-    var prev = vec2<u32>(0u);
-    var d = 0.0;
-    if !previous_point(pixel, s, &prev, &d) {
+    var p: Previous;
+    if !previous_point(pixel, s, &p) {
         return vec3<f32>(0.0);
     }
-    let t = prev >> vec2<u32>(LEVEL);
+    let t = p.at >> vec2<u32>(LEVEL);
     let g = layer1_gathered[t.y * mip_size(LEVEL).x + t.x];
-    if !(g.a > 0.0 && abs(d - g.a) <= params.tolerance) || !finite3(g.rgb) {
+    let centre = vec2<f32>(mip_origin(LEVEL, t)) + 0.5;
+    if !(g.a > 0.0 && abs(depth_at(p, centre) - g.a) <= params.tolerance) || !finite3(g.rgb) {
         return vec3<f32>(0.0);
     }
     return max(g.rgb, vec3<f32>(0.0));

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::direct::light_at;
 use crate::cpu::frame::{clip_to_pixel, image_size, mat_mul, view_position};
-use crate::cpu::spiral::pixels_per_unit;
+use crate::cpu::spiral::depth_slope_span;
 use crate::frame::{
     Cluster, FrameUniform, OffscreenUniform, RSM_CLUSTER_SIDE, RSM_CLUSTERS_PER_FACE,
     RSM_CLUSTERS_PER_PIXEL, RSM_HELD_MARGIN, RSM_RESOLUTION, ShadowFace,
@@ -39,10 +39,7 @@ pub struct Rsm<'a> {
 impl Rsm<'_> {
     /// As `held_tolerance`.
     fn held_tolerance(&self, v: Vec3, n: Vec3, z: f32) -> f32 {
-        let ray = if self.frame.ortho == 0 { v.normalize() } else { Vec3::NEG_Z };
-        let cos_v = n.normalize().dot(ray).abs().clamp(0.0995, 1.0);
-        let slope = (1.0 - cos_v * cos_v).sqrt() / cos_v;
-        2.0 * slope / pixels_per_unit(self.frame, z.max(1e-6)) + 1e-3 * z
+        depth_slope_span(self.frame, v, n, 2.0) + 1e-3 * z
     }
 
     /// As `unheld`: the share of the world point (normal `n`) the clusters carry.

@@ -25,6 +25,15 @@ pub fn pixels_per_unit(f: &FrameUniform, z: f32) -> f32 {
     if f.ortho != 0 { scale } else { scale / z }
 }
 
+/// As `depth_slope_span`: how far the view depth of a surface (view-space point `v`, normal `n`)
+/// runs over `pixels` of the screen.
+pub fn depth_slope_span(f: &FrameUniform, v: glam::Vec3, n: glam::Vec3, pixels: f32) -> f32 {
+    let ray = if f.ortho == 0 { v.normalize() } else { glam::Vec3::NEG_Z };
+    let cos_v = n.normalize().dot(ray).abs().clamp(0.0995, 1.0);
+    let slope = (1.0 - cos_v * cos_v).sqrt() / cos_v;
+    pixels * slope / pixels_per_unit(f, (-v.z).max(1e-6))
+}
+
 /// As `spiral_distance`.
 pub fn spiral_distance(i: u32, n: u32, r_px: f32) -> f32 {
     r_px * (i as f32 + 0.5) / n as f32

@@ -23,6 +23,19 @@ fn pixels_per_unit(f: Frame, z: f32) -> f32 {
     return select(scale / z, scale, f.ortho != 0u);
 }
 
+// How far the view depth of a surface (view-space point v, normal n) runs over `pixels` of the
+// screen: that many pixels' footprint at its depth times the surface's slope to the view ray
+// (the tangent of their angle, at most 10). src/cpu/spiral.rs has the same.
+fn depth_slope_span(f: Frame, v: vec3<f32>, n: vec3<f32>, pixels: f32) -> f32 {
+    var ray = vec3<f32>(0.0, 0.0, -1.0);
+    if f.ortho == 0u {
+        ray = normalize(v);
+    }
+    let cos_v = clamp(abs(dot(normalize(n), ray)), 0.0995, 1.0);
+    let slope = sqrt(1.0 - cos_v * cos_v) / cos_v;
+    return pixels * slope / pixels_per_unit(f, max(-v.z, 1e-6));
+}
+
 // Distance in pixels of tap i of n.
 fn spiral_distance(i: u32, n: u32, r_px: f32) -> f32 {
     return r_px * (f32(i) + 0.5) / f32(n);
