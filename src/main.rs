@@ -763,7 +763,13 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         // further back each, and with a move they see the material where it was.
         for frame in 0..args.frames {
             let last = frame + 1 == args.frames;
-            let at = camera.orbited(-args.turn * (args.frames - 1 - frame) as f32);
+            let back = (args.frames - 1 - frame) as f32;
+            // The last frame (and every frame without a turn) is the traced camera itself.
+            let at = if last || args.turn == 0.0 {
+                camera.clone()
+            } else {
+                camera.orbited(-args.turn * back)
+            };
             if let Some(positions) = &positions_before {
                 let now = if last { &scene.positions } else { positions };
                 buffers.write_positions(&gpu.queue, now)?;

@@ -191,9 +191,8 @@ fn finite3(v: vec3<f32>) -> bool {
 
 // Where the point of a sample was in the previous frame.
 struct Previous {
-    // Its position in the previous frame's pixels, and the pixel it fell in.
+    // Its position in the previous frame's pixels.
     px: vec2<f32>,
-    at: vec2<u32>,
     // The point and its normal in the previous frame's view space.
     v: vec3<f32>,
     n: vec3<f32>,
@@ -212,7 +211,7 @@ fn previous_point(pixel: vec2<u32>, s: GSample, out: ptr<function, Previous>) ->
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
     let v = mat_mul(frame.prev_view, world).xyz;
     let n = mat_mul(frame.prev_view, vec4<f32>(s.normal, 0.0)).xyz;
-    *out = Previous(prev, vec2<u32>(prev), v, n);
+    *out = Previous(prev, v, n);
     return true;
 }
 
@@ -240,9 +239,10 @@ fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<
     if !previous_point(pixel, s, &p) {
         return vec4<f32>(0.0);
     }
-    let q = p.at.y * frame.width + p.at.x;
+    let at = vec2<u32>(p.px);
+    let q = at.y * frame.width + at.x;
     let z0 = prev_vis0[2u * q + 1u];
-    let near0 = z0 != VIS_EMPTY && abs(depth_at(p, vec2<f32>(p.at) + 0.5) - bitcast<f32>(z0)) <= params.tolerance;
+    let near0 = z0 != VIS_EMPTY && abs(depth_at(p, vec2<f32>(at) + 0.5) - bitcast<f32>(z0)) <= params.tolerance;
     let h = history_in[q];
     if !near0 || !finite3(h.rgb) || !(h.a >= 0.0 && h.a <= 1.0) {
         return vec4<f32>(0.0);
@@ -259,7 +259,7 @@ fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
     if !previous_point(pixel, s, &p) {
         return vec3<f32>(0.0);
     }
-    let t = p.at >> vec2<u32>(LEVEL);
+    let t = vec2<u32>(p.px) >> vec2<u32>(LEVEL);
     let g = layer1_gathered[t.y * mip_size(LEVEL).x + t.x];
     let centre = vec2<f32>(mip_origin(LEVEL, t)) + 0.5;
     if !(g.a > 0.0 && abs(depth_at(p, centre) - g.a) <= params.tolerance) || !finite3(g.rgb) {
