@@ -105,6 +105,9 @@ struct SweepArgs {
     /// Layer-1 gather tap counts to sweep (0: none).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_layer1_samples))]
     radiosity_layer1_samples: Vec<u32>,
+    /// Obscurance temporal filter weights to sweep (0: no filter).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_alpha))]
+    ao_alpha: Vec<f32>,
     /// Radiosity slices a frame with the temporal history gathers, to sweep (0: all).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_history_slices))]
     radiosity_history_slices: Vec<u32>,
@@ -270,6 +273,14 @@ struct AoArgs {
     /// depth and normal [default: 1].
     #[arg(long)]
     ao_downsample: Option<u32>,
+    /// Weight of the history in the obscurance's temporal filter, in [0, 1); 0: no filter
+    /// [default: 0].
+    #[arg(long)]
+    ao_alpha: Option<f32>,
+    /// Slices the horizon and bitmask estimators take in a frame that has the temporal
+    /// filter's history, each with the same steps a side (0: all) [default: 0].
+    #[arg(long)]
+    ao_history_slices: Option<u32>,
 }
 
 impl AoArgs {
@@ -281,6 +292,8 @@ impl AoArgs {
         ao.slices = self.ao_slices.unwrap_or(ao.slices);
         ao.thickness = self.ao_thickness.unwrap_or(ao.thickness);
         ao.downsample = self.ao_downsample.unwrap_or(ao.downsample);
+        ao.alpha = self.ao_alpha.unwrap_or(ao.alpha);
+        ao.history_slices = self.ao_history_slices.unwrap_or(ao.history_slices);
         if self.ao_one_layer {
             ao.two_layers = false;
         }
@@ -886,6 +899,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_estimator: args.ao_estimator,
         ao_slices: args.ao_slices,
         ao_samples: args.ao_samples,
+        ao_alpha: args.ao_alpha,
         radiosity_samples: args.radiosity_samples,
         radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,

@@ -33,6 +33,8 @@ pub enum PassId {
     Pyramid,
     /// Ambient obscurance.
     Ao,
+    /// The temporal filter of the obscurance ([`AoSettings::alpha`](crate::AoSettings::alpha)).
+    AoTemporal,
     /// The bilateral blur of the obscurance.
     AoBlur,
     /// The shadow map of one light.
@@ -89,7 +91,7 @@ pub(crate) enum StageId {
 
 impl PassId {
     /// Every pass but the per-light shadow passes, in frame order.
-    pub const FIXED: [PassId; 21] = [
+    pub const FIXED: [PassId; 22] = [
         PassId::RasterClear,
         PassId::RasterLayer0,
         PassId::RasterLayer1,
@@ -98,6 +100,7 @@ impl PassId {
         PassId::Resolve,
         PassId::Pyramid,
         PassId::Ao,
+        PassId::AoTemporal,
         PassId::AoBlur,
         PassId::Direct,
         PassId::Radiosity,
@@ -124,6 +127,7 @@ impl PassId {
             PassId::Resolve => "resolve",
             PassId::Pyramid => "pyramid",
             PassId::Ao => "ao",
+            PassId::AoTemporal => "ao.temporal",
             PassId::AoBlur => "ao.blur",
             PassId::Shadow { name, .. } => return Cow::Owned(format!("shadow.{name}")),
             PassId::Direct => "direct",
@@ -145,7 +149,7 @@ impl PassId {
     /// frame pays).
     pub fn effect(&self) -> Option<Effect> {
         match self {
-            PassId::Pyramid | PassId::Ao | PassId::AoBlur => Some(Effect::Ao),
+            PassId::Pyramid | PassId::Ao | PassId::AoTemporal | PassId::AoBlur => Some(Effect::Ao),
             PassId::Shadow { .. } => Some(Effect::Shadows),
             PassId::Direct => Some(Effect::Direct),
             PassId::Radiosity
@@ -177,7 +181,7 @@ impl PassId {
             | PassId::RasterLayers
             | PassId::RasterNext => StageId::Raster,
             PassId::Resolve => StageId::Resolve,
-            PassId::Pyramid | PassId::Ao | PassId::AoBlur => StageId::Ao,
+            PassId::Pyramid | PassId::Ao | PassId::AoTemporal | PassId::AoBlur => StageId::Ao,
             PassId::Shadow { .. } => StageId::Shadows,
             PassId::Direct => StageId::Direct,
             PassId::Radiosity
@@ -446,6 +450,9 @@ impl Plan {
         passes.push(PassId::Resolve);
         if ao {
             passes.extend([PassId::Pyramid, PassId::Ao]);
+            if settings.ao.temporal() {
+                passes.push(PassId::AoTemporal);
+            }
             if settings.ao.blur_radius > 0 {
                 passes.push(PassId::AoBlur);
             }

@@ -650,8 +650,12 @@ impl Renderer {
             plan.reused = kept;
         }
         if !provided && self.is_still(scene, camera, &plan) {
-            let (kept, run): (Vec<PassId>, Vec<PassId>) =
-                plan.passes.into_iter().partition(PassId::same_when_still);
+            // The obscurance's temporal filter goes on averaging turned slices for a while.
+            let ao = self.settings.ao.runs_when_still(self.still_frames + 1);
+            let (kept, run): (Vec<PassId>, Vec<PassId>) = plan.passes.into_iter().partition(|p| {
+                p.same_when_still()
+                    && !(ao && matches!(p, PassId::Ao | PassId::AoTemporal | PassId::AoBlur))
+            });
             plan.passes = run;
             plan.reused.extend(kept);
         }
@@ -856,6 +860,13 @@ impl Renderer {
             && st.ao.as_ref().is_none_or(|a| a.two_layers() != plan.ao_two_layers)
         {
             st.ao = Some(AoStage::new(device, s, plan.ao_two_layers));
+        }
+        if let Some(ao) = st.ao.as_mut() {
+            if plan.contains(&PassId::Ao) {
+                ao.prepare(queue, s, self.history.is_some(), self.still_frames);
+            } else if !plan.reused.contains(&PassId::Ao) {
+                ao.skipped();
+            }
         }
         st.direct.prepare(queue, scene, s, plan);
         if plan.runs(Effect::Radiosity) {
@@ -1185,6 +1196,12 @@ impl Renderer {
     /// The obscurance before the blur, or `None` when obscurance has not run.
     pub fn ao_raw_buffer(&self) -> Option<&wgpu::Buffer> {
         self.stages.ao.as_ref().map(AoStage::raw)
+    }
+
+    /// The obscurance after its temporal filter, before the blur (f32 per pixel), or `None`
+    /// when obscurance has not run or runs without the filter ([`AoSettings::alpha`](crate::AoSettings) 0).
+    pub fn ao_filtered_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.stages.ao.as_ref().and_then(AoStage::filtered)
     }
 
     /// The obscurance as computed at 1 / [`AoSettings::downsample`](crate::AoSettings) of the

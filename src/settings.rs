@@ -256,6 +256,25 @@ pub struct AoSettings {
     /// each value at a real pixel of its block, and fill in the rest with a depth- and
     /// normal-aware upsample (`wgsl/upsample.wgsl`).
     pub downsample: u32,
+    /// Weight alpha in [0, 1) of the history in the obscurance's temporal filter
+    /// (`wgsl/temporal.wgsl`, `ao.temporal`); 0: no filter, each frame's AV alone. With it the
+    /// slices (`horizon`, `bitmask`) turn every frame, and the filter averages what each frame's
+    /// directions found at the same surface point over about `(1 + alpha) / (1 - alpha)` frames.
+    pub alpha: f32,
+    /// Slices the `horizon` and `bitmask` estimators take in a frame that has the temporal
+    /// filter's history (0, or [`slices`](Self::slices) and above: all of them), each with the
+    /// same steps a side: the history holds what the others would find, and the pass costs
+    /// about `history_slices / slices` of its time on every frame but a first one.
+    pub history_slices: u32,
+    /// How far (view depth, scene units) the previous frame's layer 0 may lie from a point's
+    /// surface for the point to keep its history (scaled with the scene, as the radius is).
+    pub history_tolerance: f32,
+    /// Frames a still view goes on computing the obscurance with the temporal filter, each
+    /// weighed as one of the mean of the frames since the view stood still, before it keeps
+    /// the result (as it does at once without the filter): the slices turn every frame, so a
+    /// still view's AV converges toward the estimator's with this many times the slices.
+    /// 0: kept at once.
+    pub still_frames: u32,
 }
 
 impl Default for AoSettings {
@@ -273,11 +292,49 @@ impl Default for AoSettings {
             blur_radius: 4,
             mip_offset: 3,
             downsample: 1,
+            alpha: 0.0,
+            history_slices: 0,
+            history_tolerance: 0.0001,
+            still_frames: 16,
         }
     }
 }
 
 impl AoSettings {
+    /// Whether the temporal filter runs (`ao.temporal`): `alpha` above 0.
+    pub fn temporal(&self) -> bool {
+        self.alpha > 0.0
+    }
+
+    /// Whether the `still`-th still frame in a row (1: the first that repeats the view) computes
+    /// the obscurance again rather than keeping the last frame's: with the temporal filter,
+    /// for the first [`still_frames`](Self::still_frames).
+    pub fn runs_when_still(&self, still: u32) -> bool {
+        self.temporal() && still <= self.still_frames
+    }
+
+    /// The temporal filter's weight of the history on the `still`-th still frame in a row (0:
+    /// the camera or the scene moved, or a first frame): `alpha`, and on a still frame
+    /// `max(alpha, 1 - 1 / (still + 1))`, the mean of the frames since the view stood still
+    /// (the moving frames' history counting as one).
+    pub fn history_weight(&self, still: u32) -> f32 {
+        if still == 0 {
+            return self.alpha;
+        }
+        self.alpha.max(1.0 - 1.0 / (still as f32 + 1.0))
+    }
+
+    /// The slices and taps of a frame's obscurance: all of them without the `history`, else
+    /// [`history_slices`](Self::history_slices) of the slices with the same steps a side
+    /// (the slice estimators with the temporal filter only).
+    pub fn frame_taps(&self, history: bool) -> (u32, u32) {
+        let some = self.history_slices;
+        if !history || !self.temporal() || self.estimator == AoEstimator::Sao {
+            return (self.slices, self.samples);
+        }
+        history_slice_taps(self.slices, some, self.samples)
+    }
+
     /// How deep an occluder's solid reaches behind its surface, in scene units: `thickness`
     /// times the radius for `bitmask`, 0 (without end) for `horizon` (and unused by `sao`).
     pub fn solid_depth(&self) -> f32 {
@@ -335,6 +392,21 @@ impl AoSettings {
                 format!("{} (at most 32)", self.blur_radius),
             ));
         }
+        if !(self.alpha >= 0.0 && self.alpha < 1.0) {
+            return Err(Error::setting("ao.alpha", format!("{} (must be in [0, 1))", self.alpha)));
+        }
+        if self.history_slices > 16 {
+            return Err(Error::setting(
+                "ao.history_slices",
+                format!("{} (must be 0 to 16)", self.history_slices),
+            ));
+        }
+        if !(self.history_tolerance.is_finite() && self.history_tolerance >= 0.0) {
+            return Err(Error::setting(
+                "ao.history_tolerance",
+                format!("{} (must be finite and >= 0)", self.history_tolerance),
+            ));
+        }
         Ok(())
     }
 }
@@ -378,9 +450,9 @@ pub struct RadiositySettings {
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,
-    /// Turn the tap spiral (or the slices) every frame, so the temporal filter averages
-    /// different taps (less noise, a little flicker); off, a static camera converges to a fixed
-    /// point.
+    /// Turn the tap spiral (or the slices and their steps' jitter) every frame, so the temporal
+    /// filter averages different taps (less noise, a little flicker); off, a static camera
+    /// converges to a fixed point.
     pub jitter: bool,
     /// How the counted taps are normalised into irradiance (`spiral` only).
     pub normalization: Normalization,
@@ -528,19 +600,12 @@ impl RadiositySettings {
     /// the layer-1 gather's): all of them without the `history`, else
     /// [`history_slices`](Self::history_slices) of the slices with the same steps a side.
     pub fn frame_taps(&self, history: bool) -> (u32, u32, u32) {
-        let all = (self.slices, self.samples, self.layer1_samples);
-        let some = self.history_slices;
-        if !history
-            || !self.jitter
-            || self.estimator != RadiosityEstimator::Slices
-            || some == 0
-            || some >= self.slices
-        {
-            return all;
+        if !history || !self.jitter || self.estimator != RadiosityEstimator::Slices {
+            return (self.slices, self.samples, self.layer1_samples);
         }
-        // The kernels take max(taps / (2 slices), 1) steps a side.
-        let taps = |t: u32| if t == 0 { 0 } else { (t / (2 * self.slices)).max(1) * 2 * some };
-        (some, taps(self.samples), taps(self.layer1_samples))
+        let (slices, samples) = history_slice_taps(self.slices, self.history_slices, self.samples);
+        let (_, layer1) = history_slice_taps(self.slices, self.history_slices, self.layer1_samples);
+        (slices, samples, layer1)
     }
 
     /// The most frames a still view's filter averages over (its history weight stops at
@@ -895,12 +960,13 @@ impl Settings {
         (extent / Self::REFERENCE_EXTENT).log2().round().clamp(-60.0, 60.0).exp2()
     }
 
-    /// These settings with every length multiplied by `scale`: the obscurance radius and bias,
-    /// the radiosity radius and history tolerance, Δz, and the reflections' distance and
+    /// These settings with every length multiplied by `scale`: the obscurance radius, bias and
+    /// history tolerance, the radiosity radius and history tolerance, Δz, and the reflections' distance and
     /// thickness. Counts, pixels and fractions stay.
     pub fn scaled(mut self, scale: f32) -> Self {
         self.ao.radius *= scale;
         self.ao.bias *= scale;
+        self.ao.history_tolerance *= scale;
         self.radiosity.radius *= scale;
         self.radiosity.history_tolerance *= scale;
         self.dz *= scale;
@@ -1032,6 +1098,16 @@ impl Effects {
         }
         Ok(e)
     }
+}
+
+/// A slices estimator's slices and taps in a frame that takes `some` of its `slices` (0, or
+/// `slices` and above: all of them) with the same steps a side: the kernels take
+/// `max(taps / (2 slices), 1)` steps a side, and no taps stay none.
+fn history_slice_taps(slices: u32, some: u32, taps: u32) -> (u32, u32) {
+    if some == 0 || some >= slices || taps == 0 {
+        return (slices, taps);
+    }
+    (some, (taps / (2 * slices)).max(1) * 2 * some)
 }
 
 /// Refuses a `downsample` other than 1, 2 or 4.

@@ -45,6 +45,9 @@ pub struct Knobs {
     pub ao_slices: u32,
     /// Obscurance taps per pixel.
     pub ao_samples: u32,
+    /// Weight of the history in the obscurance's temporal filter ([`AoSettings::alpha`]; 0:
+    /// none).
+    pub ao_alpha: f32,
     /// Radiosity taps per pixel.
     pub radiosity_samples: u32,
     /// Radiosity slices per pixel (`slices` gather; its taps shared among them).
@@ -115,6 +118,7 @@ impl Knobs {
                 estimator: self.ao_estimator,
                 slices: self.ao_slices,
                 samples: self.ao_samples,
+                alpha: self.ao_alpha,
                 two_layers: self.layers == 2,
                 mip_offset: self.mip_offset,
                 downsample: self.ao_downsample,
@@ -183,6 +187,8 @@ pub struct Grid {
     pub ao_slices: Vec<u32>,
     /// Obscurance taps.
     pub ao_samples: Vec<u32>,
+    /// Obscurance temporal filter weights.
+    pub ao_alpha: Vec<f32>,
     /// Radiosity taps.
     pub radiosity_samples: Vec<u32>,
     /// Radiosity slices.
@@ -238,6 +244,7 @@ impl Default for Grid {
             ao_estimator: vec![AoEstimator::Sao, AoEstimator::Bitmask],
             ao_slices: vec![settings.ao.slices],
             ao_samples: vec![4, 8, 16, 32, 64],
+            ao_alpha: vec![settings.ao.alpha],
             radiosity_samples: vec![5, 9, 13, 19, 27],
             radiosity_slices: vec![settings.radiosity.slices],
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
@@ -284,6 +291,7 @@ impl Grid {
             ao_estimator: settings.ao.estimator,
             ao_slices: settings.ao.slices,
             ao_samples: settings.ao.samples,
+            ao_alpha: settings.ao.alpha,
             radiosity_samples: settings.radiosity.samples,
             radiosity_slices: settings.radiosity.slices,
             radiosity_layer1_samples: settings.radiosity.layer1_samples,
@@ -327,6 +335,7 @@ impl Grid {
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
         let k = times(k, &self.ao_slices, |k, v| k.ao_slices = v);
         let k = times(k, &self.ao_samples, |k, v| k.ao_samples = v);
+        let k = times(k, &self.ao_alpha, |k, v| k.ao_alpha = v);
         let k = times(k, &self.radiosity_slices, |k, v| k.radiosity_slices = v);
         times(k, &self.radiosity_samples, |k, v| k.radiosity_samples = v)
     }
@@ -634,7 +643,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,ao_alpha,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -657,10 +666,11 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
+            k.ao_alpha,
             k.radiosity_samples,
             k.radiosity_slices,
             k.radiosity_layer1_samples,
@@ -733,9 +743,10 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 20] = [
+    let optional: [Column; 21] = [
         ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
         ("AO slices", |k| k.ao_slices.to_string()),
+        ("AO history weight", |k| k.ao_alpha.to_string()),
         ("radiosity slices", |k| k.radiosity_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("position", |k| k.position.name().to_string()),

@@ -9,6 +9,7 @@ use deep_gbuffer::cpu::{
     ao as cpu_ao, blur as cpu_blur, pyramid as cpu_pyramid, upsample as cpu_upsample,
 };
 use deep_gbuffer::frame::PyramidLayout;
+use deep_gbuffer::plan::PassId;
 use deep_gbuffer::settings::downsample_level;
 use deep_gbuffer::{AoEstimator, AoSettings, Camera, Scene, Settings};
 use glam::Vec3;
@@ -185,6 +186,10 @@ fn invalid_obscurance_settings_are_refused() {
         (AoSettings { intensity: f32::NAN, ..Default::default() }, "ao.intensity"),
         (AoSettings { downsample: 3, ..Default::default() }, "ao.downsample"),
         (AoSettings { downsample: 0, ..Default::default() }, "ao.downsample"),
+        (AoSettings { alpha: 1.0, ..Default::default() }, "ao.alpha"),
+        (AoSettings { alpha: f32::NAN, ..Default::default() }, "ao.alpha"),
+        (AoSettings { history_slices: 17, ..Default::default() }, "ao.history_slices"),
+        (AoSettings { history_tolerance: -1.0, ..Default::default() }, "ao.history_tolerance"),
     ] {
         match deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(8, 8, ao)) {
             Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
@@ -334,4 +339,96 @@ fn slice_estimators_converge_to_the_corner_closed_form() {
         assert!(fine < coarse, "{estimator:?}: the error falls as taps grow ({errors:?})");
         assert!(fine <= 0.01 && bias.abs() <= 0.005, "{estimator:?}: {errors:?}");
     }
+}
+
+/// The temporal filter (`ao.alpha`): each frame with a history turns the slices (the CPU
+/// reference of that turn agrees) and blends its AV with the last frame's filtered AV at the same
+/// point; a still view goes on averaging for `still_frames` frames, each weighed as one of the
+/// mean once that weighs less than alpha, and then keeps the result; a cut starts afresh.
+#[test]
+fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let (w, h) = (48, 36);
+    let ao = AoSettings {
+        estimator: AoEstimator::Bitmask,
+        slices: 1,
+        samples: 16,
+        radius: 0.4,
+        alpha: 0.85,
+        still_frames: 16,
+        ..Default::default()
+    };
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let mut renderer =
+        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
+    let read = |r: &deep_gbuffer::Renderer, b: Option<&deep_gbuffer::wgpu::Buffer>| {
+        r.read_f32(&g.device, &g.queue, b.unwrap()).unwrap()[..(w * h) as usize].to_vec()
+    };
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let plan = renderer.last_plan().unwrap();
+    assert!(plan.contains(&PassId::AoTemporal), "the filter runs with alpha above 0");
+    let first_raw = read(&renderer, renderer.ao_raw_buffer());
+    let mut filtered = read(&renderer, renderer.ao_filtered_buffer());
+    assert_eq!(filtered, first_raw, "a first frame has no history: its own AV");
+
+    // The frames of a still view: the slices turn, the CPU's turned estimator agrees, and each
+    // frame's filtered AV is the mean of the frames so far (the first frame's counting as one).
+    let layout = PyramidLayout::new(w, h);
+    let layers = [0, 1].map(|l| renderer.read_gbuffer(&g.device, &g.queue, l).unwrap());
+    let pyramids = [0, 1].map(|l| {
+        let depth: Vec<f32> = layers[l].samples.iter().map(|s| s.depth).collect();
+        cpu_pyramid::pyramid(&depth, &layout)
+    });
+    let mut changes = Vec::new();
+    for still in 1..=ao.still_frames {
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        let plan = renderer.last_plan().unwrap();
+        assert!(plan.contains(&PassId::Ao), "still frame {still} computes the obscurance");
+        assert!(plan.reused.contains(&PassId::Resolve), "still frame {still} keeps its G-buffer");
+        let raw = read(&renderer, renderer.ao_raw_buffer());
+        if still == 1 {
+            let frame = *renderer.frame_uniform().unwrap();
+            let expected = cpu_ao::ao_at_turn(
+                &frame,
+                &ao,
+                still,
+                &layers[0].samples,
+                &layout,
+                &pyramids[0],
+                Some(&pyramids[1]),
+            );
+            let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
+            assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, "turned slices");
+            let turned = raw.iter().zip(&first_raw).filter(|(a, b)| far(a, b)).count();
+            assert!(turned * 4 > raw.len(), "the slices turned: {turned} pixels changed");
+        }
+        let next = read(&renderer, renderer.ao_filtered_buffer());
+        let weight = ao.history_weight(still);
+        assert_eq!(weight, ao.alpha.max(1.0 - 1.0 / (still as f32 + 1.0)));
+        for p in 0..raw.len() {
+            let expected = raw[p] * (1.0 - weight) + filtered[p] * weight;
+            assert!((next[p] - expected).abs() < 1e-6, "pixel {p}: {} against {expected}", next[p]);
+        }
+        changes.push(next.iter().zip(&filtered).map(|(a, b)| (a - b).abs()).sum::<f32>());
+        filtered = next;
+    }
+    eprintln!("summed change of the filtered AV, frame by frame: {changes:?}");
+    // The weight rises from alpha (0.85) past the 6th still frame to 1 - 1/17 at the 16th: a
+    // frame then moves the mean by 2.5 times less.
+    let (early, late) =
+        (changes[..4].iter().sum::<f32>() / 4.0, changes[12..].iter().sum::<f32>() / 4.0);
+    assert!(late < 0.6 * early, "a still view settles: {changes:?}");
+
+    // Past still_frames the view keeps its obscurance.
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let plan = renderer.last_plan().unwrap();
+    assert!(plan.reused.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
+    assert_eq!(read(&renderer, renderer.ao_buffer()).len(), filtered.len());
+
+    // A cut: the next frame is a first frame again.
+    renderer.reset_history();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    assert_eq!(read(&renderer, renderer.ao_filtered_buffer()), first_raw, "the history is dropped");
 }

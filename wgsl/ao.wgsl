@@ -54,6 +54,12 @@ struct Ao {
     slices: u32,
     // How far an occluder reaches behind its surface; 0: without end (SLICES).
     thickness: f32,
+    // Frames since the temporal filter's history began (0 without it): turns the slices, so
+    // that wgsl/temporal.wgsl averages other directions every frame (SLICES).
+    turn: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
     offsets: array<vec4<u32>, 2>,
 }
 
@@ -170,7 +176,7 @@ fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
 fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {
     let slices = max(ao.slices, 1u);
     let steps = max(ao.samples / (2u * slices), 1u);
-    let noise = slice_noise(noise_at, 0u);
+    let noise = slice_noise(noise_at, ao.turn);
     let r2 = ao.radius * ao.radius;
     var total = 0.0;
     for (var k = 0u; k < slices; k++) {

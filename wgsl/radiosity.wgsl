@@ -60,12 +60,9 @@
 // and the temporal filter average it linearly (a mean of products is not the product of means:
 // a pixel that saw little but bright light next to one that saw much dim light would otherwise
 // read as much bright light).
-// radiosity_temporal: E_t = E (1 - alpha) + E_{t-1} alpha (irradiance and coverage alike) where
-//   the previous frame's layer 0 at the pixel the point fell in lies within `tolerance` (view
-//   depth, scene units) of the point's surface at that pixel's centre (depth_at); otherwise E.
-//   The history holds layer 0's irradiance only, so a point that was hidden (in layer 1, or not at
-//   all) has none: taking the layer-0 value there would paint the surface that covered it.
-//   Non-finite values never enter the history.
+// The temporal filter (`radiosity.temporal`) is wgsl/temporal.wgsl with VEC4: E_t = E (1 - alpha)
+//   + E_{t-1} alpha, irradiance and coverage alike, where the point keeps its history
+//   (shared/history.wgsl). The history holds layer 0's irradiance only.
 // src/cpu/radiosity.rs is the same on the CPU.
 // defines: PACKED SLICES
 // constants: LEVEL (the gather's resolution), RECEIVER (the layer whose points gather),
@@ -151,8 +148,9 @@ struct SourceTexel {
 @group(0) @binding(6) var<storage, read_write> source: array<SourceTexel>;
 @group(0) @binding(7) var<uniform> level: PyramidLevel;
 @group(0) @binding(8) var<storage, read_write> raw: array<vec4<f32>>;
+// The previous frame's filtered irradiance and coverage (wgsl/temporal.wgsl), and its layer-0
+// visibility words: shared/history.wgsl's history_at reads them.
 @group(0) @binding(9) var<storage, read> history_in: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> history_out: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> prev_vis0: array<u32>;
 // The layer-1 gather at the texels of the rotated grid's level LEVEL: E / c (rgb) and the view
 // depth of the point that gathered (a; 0: none). Written by the gather with RECEIVER = 1, read by
@@ -189,74 +187,22 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.0e38));
 }
 
-// Where the point of a sample was in the previous frame.
-struct Previous {
-    // Its position in the previous frame's pixels.
-    px: vec2<f32>,
-    // The point and its normal in the previous frame's view space.
-    v: vec3<f32>,
-    n: vec3<f32>,
+// The filtered history's values (shared/history.wgsl): irradiance and coverage, as
+// wgsl/temporal.wgsl keeps them.
+alias Value = vec4<f32>;
+
+fn usable(v: Value) -> bool {
+    return finite3(v.rgb) && v.a >= 0.0 && v.a <= 1.0;
 }
 
-// Where the point of sample s at `pixel` was in the previous frame (false when off the screen,
-// when there is no history or no point).
-fn previous_point(pixel: vec2<u32>, s: GSample, out: ptr<function, Previous>) -> bool {
-    if params.history == 0u || !(s.depth > 0.0) {
-        return false;
-    }
-    let prev = vec2<f32>(pixel) + 0.5 - s.motion;
-    if !(prev.x >= 0.0 && prev.y >= 0.0 && prev.x < f32(frame.width) && prev.y < f32(frame.height)) {
-        return false;
-    }
-    let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
-    let v = mat_mul(frame.prev_view, world).xyz;
-    let n = mat_mul(frame.prev_view, vec4<f32>(s.normal, 0.0)).xyz;
-    *out = Previous(prev, v, n);
-    return true;
-}
-
-// The view depth the surface of point p had at pixel centre `centre` of the previous frame: where
-// that pixel's ray meets p's tangent plane, moved from p's own depth by no more than a slanted
-// surface runs over their distance (depth_slope_span: the slope at most 10; the rays taken with
-// this frame's projection). A pixel's depth belongs to its centre, up to sqrt(1/2) pixel from the
-// point: held against the point's own depth, a floor seen at a slant lost its history at every
-// turn of the camera (README, "Slanted surfaces keep their history"), and held against any depth
-// within that run, a surface uncovered beside one that moved away could take its history.
-fn depth_at(p: Previous, centre: vec2<f32>) -> f32 {
-    let o = view_position(frame, centre, 0.0);
-    let dir = view_position(frame, centre, 1.0) - o;
-    let own = -p.v.z;
-    let t = dot(p.v - o, p.n) / dot(dir, p.n);
-    let span = depth_slope_span(frame, p.v, p.n, length(centre - p.px));
-    return own + select(0.0, clamp(t - own, -span, span), abs(t) <= 3.0e38);
-}
-
-// The previous frame's filtered history at the layer-0 point of `pixel`: the irradiance found
-// (rgb) and the share of the hemisphere it covers (a); `valid` tells whether there is one.
-fn history_at(pixel: vec2<u32>, s: GSample, valid: ptr<function, bool>) -> vec4<f32> {
-    *valid = false;
-    var p: Previous;
-    if !previous_point(pixel, s, &p) {
-        return vec4<f32>(0.0);
-    }
-    let at = vec2<u32>(p.px);
-    let q = at.y * frame.width + at.x;
-    let z0 = prev_vis0[2u * q + 1u];
-    let near0 = z0 != VIS_EMPTY && abs(depth_at(p, vec2<f32>(at) + 0.5) - bitcast<f32>(z0)) <= params.tolerance;
-    let h = history_in[q];
-    if !near0 || !finite3(h.rgb) || !(h.a >= 0.0 && h.a <= 1.0) {
-        return vec4<f32>(0.0);
-    }
-    *valid = true;
-    return h;
-}
+#include "shared/history.wgsl"
 
 // The last frame's layer-1 gather at the layer-1 point of `pixel` (sample s), spread over the
 // hemisphere (E / c): read at the texel of level LEVEL over the point's last pixel, and only
 // where that texel's point lay within `tolerance` of the point's surface there (0 elsewhere).
 fn layer1_history_at(pixel: vec2<u32>, s: GSample) -> vec3<f32> {
     var p: Previous;
-    if !previous_point(pixel, s, &p) {
+    if params.history == 0u || !previous_point(pixel, s, &p) {
         return vec3<f32>(0.0);
     }
     let t = vec2<u32>(p.px) >> vec2<u32>(LEVEL);
@@ -303,7 +249,7 @@ fn radiosity_feedback(@builtin(global_invocation_id) gid: vec3<u32>) {
     if s0.depth > 0.0 {
         // The next bounce spreads what the gather found over the whole hemisphere.
         var valid = false;
-        let h = history_at(gid.xy, s0, &valid);
+        let h = history_at(gid.xy, s0, params.history != 0u, params.tolerance, &valid);
         let e = select(vec3<f32>(0.0), spread(h), valid);
         let b0 = boost(s0.base_color);
         hidden0 = reflected(s0, b0, e);
@@ -581,20 +527,4 @@ fn layer1_record(g: vec4<f32>, z: f32) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     return vec4<f32>(select(vec3<f32>(0.0), spread(g), finite3(g.rgb)), z);
-}
-
-@compute @workgroup_size(8, 8)
-fn radiosity_temporal(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
-        return;
-    }
-    let p = gid.y * frame.width + gid.x;
-    let current = raw[p];
-    var e = select(vec4<f32>(0.0), current, finite3(current.rgb) && abs(current.a) <= 1.0);
-    var valid = false;
-    let h = history_at(gid.xy, sample0(p), &valid);
-    if valid {
-        e = mix(e, h, params.alpha);
-    }
-    history_out[p] = select(vec4<f32>(0.0), e, finite3(e.rgb));
 }

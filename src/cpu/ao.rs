@@ -30,7 +30,24 @@ pub fn ao(
     pyramid0: &[f32],
     pyramid1: Option<&[f32]>,
 ) -> Vec<f32> {
-    let kernel = Kernel { f, s, layout, pyramid0, pyramid1 };
+    ao_at_turn(f, s, 0, layer0, layout, pyramid0, pyramid1)
+}
+
+/// [`ao`] of a frame `turn` frames into the temporal filter's history (0: without one): the
+/// slices turned by `turn`, with the slices and taps that frame takes
+/// ([`AoSettings::frame_taps`]).
+pub fn ao_at_turn(
+    f: &FrameUniform,
+    s: &AoSettings,
+    turn: u32,
+    layer0: &[GSample],
+    layout: &PyramidLayout,
+    pyramid0: &[f32],
+    pyramid1: Option<&[f32]>,
+) -> Vec<f32> {
+    let (slices, samples) = s.frame_taps(turn > 0);
+    let s = &AoSettings { slices, samples, ..s.clone() };
+    let kernel = Kernel { f, s, turn, layout, pyramid0, pyramid1 };
     let level = downsample_level(s.downsample) as usize;
     let size = mip_size(f.width, f.height, level);
     let mut out = vec![1.0; (size.0 * size.1) as usize];
@@ -61,6 +78,7 @@ fn step_falloff(own: f32, last: Option<f32>) -> f32 {
 struct Kernel<'a> {
     f: &'a FrameUniform,
     s: &'a AoSettings,
+    turn: u32,
     layout: &'a PyramidLayout,
     pyramid0: &'a [f32],
     pyramid1: Option<&'a [f32]>,
@@ -122,7 +140,7 @@ impl Kernel<'_> {
         let (f, s) = (self.f, self.s);
         let slices = s.slices.max(1);
         let steps = (s.samples / (2 * slices)).max(1);
-        let noise = slice_noise(noise_at.0, noise_at.1, 0);
+        let noise = slice_noise(noise_at.0, noise_at.1, self.turn);
         let thickness = s.solid_depth();
         let r2 = s.radius * s.radius;
         let falloff = |front2: f32| (1.0 - front2 / r2).max(0.0);

@@ -15,14 +15,15 @@ const PI: f32 = std::f32::consts::PI;
 const BAYER: [[u32; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
 
 /// As `slice_noise`: the pixel's turn of the slices (a 4x4 Bayer pattern plus a little of its
-/// hash), jitter of the steps and offset of the sectors, moved on by `frame_turn` golden-ratio
-/// steps.
+/// hash), jitter of the steps and offset of the sectors; the turn and the jitter moved on by
+/// `frame_turn` steps of the golden ratio and of 0.5698.
 pub fn slice_noise(x: u32, y: u32, frame_turn: u32) -> (f32, f32, f32) {
     let hash = pixel_hash(x, y);
     let bayer = BAYER[(y & 3) as usize][(x & 3) as usize];
     let within = (hash >> 24) as f32 / 256.0;
     let turn = ((bayer as f32 + within) / 16.0 + (frame_turn % 4096) as f32 * 0.618_034).fract();
-    let jitter = ((hash >> 8) & 0xfff) as f32 / 4096.0;
+    let jitter =
+        (((hash >> 8) & 0xfff) as f32 / 4096.0 + (frame_turn % 4096) as f32 * 0.569_840_3).fract();
     let offset = (hash & 0xff) as f32 / 256.0 + 0.5 / 256.0;
     (turn, jitter, offset)
 }

@@ -25,7 +25,8 @@ pub use shadow::{
 pub use source::{RGB9E5_MAX, SourceTexel, pack_normal, pack_rgb9e5, unpack_rgb9e5};
 pub use uniforms::{
     AoUniform, CompositeUniform, DirectUniform, DofUniform, FillParams, LevelUniform, MOTION_TILE,
-    MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform, TransparencyUniform,
+    MotionBlurUniform, RadiosityUniform, RasterCounters, ReflectionsUniform, TemporalUniform,
+    TransparencyUniform,
 };
 
 /// A `#[repr(C)]` struct's size and field offsets, and the WGSL struct it mirrors.
@@ -81,6 +82,7 @@ pub const MIRRORED: &[MirrorLayout] = &[
     FillParams::LAYOUT,
     ShadowFace::LAYOUT,
     OffscreenUniform::LAYOUT,
+    TemporalUniform::LAYOUT,
     Cluster::LAYOUT,
     GpuLight::LAYOUT,
     GpuMaterial::LAYOUT,

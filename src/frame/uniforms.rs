@@ -31,16 +31,19 @@ pub struct AoUniform {
     /// [`AoSettings::thickness`] times the radius, in scene units; 0 for the `horizon`
     /// estimator (solid without end).
     pub thickness: f32,
+    /// Frames since the temporal filter's history began (0 without it): turns the slices.
+    pub turn: u32,
+    pub _pad: [u32; 3],
     /// Level offsets in the packed pyramid (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<AoUniform>() == 64);
+const _: () = assert!(std::mem::size_of::<AoUniform>() == 80);
 mirrored!(
     AoUniform,
     "ao.wgsl",
     "Ao",
-    [radius, bias, intensity, samples, levels, mip_offset, slices, thickness, offsets]
+    [radius, bias, intensity, samples, levels, mip_offset, slices, thickness, turn, offsets]
 );
 
 impl AoUniform {
@@ -55,10 +58,35 @@ impl AoUniform {
             mip_offset: settings.mip_offset,
             slices: settings.slices,
             thickness: settings.solid_depth(),
+            turn: 0,
+            _pad: [0; 3],
             offsets: level_offsets(layout),
         }
     }
+
+    /// The constants of a frame `turn` frames into the temporal filter's history (0: without
+    /// one), with the slices and taps that frame takes ([`AoSettings::frame_taps`]).
+    pub fn for_frame(settings: &AoSettings, layout: &PyramidLayout, turn: u32) -> Self {
+        let (slices, samples) = settings.frame_taps(turn > 0);
+        AoUniform { turn, slices, samples, ..AoUniform::new(settings, layout) }
+    }
 }
+
+/// Mirrors `struct Temporal` in `wgsl/temporal.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TemporalUniform {
+    /// Weight of the history, in [0, 1).
+    pub alpha: f32,
+    /// How far the previous frame's layer 0 may lie from a point's surface (view depth, scene
+    /// units) for the point to keep its history.
+    pub tolerance: f32,
+    /// 1 when the previous frame's filtered values may be used.
+    pub history: u32,
+    pub _pad: u32,
+}
+
+mirrored!(TemporalUniform, "temporal.wgsl", "Temporal", [alpha, tolerance, history]);
 
 /// The first texel of each of `layout`'s levels (up to 8), as the kernels' `offsets` hold them.
 fn level_offsets(layout: &PyramidLayout) -> [[u32; 4]; 2] {

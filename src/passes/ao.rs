@@ -2,6 +2,7 @@
 
 use super::blur::Blur;
 use super::pyramid::{Pyramid, PyramidKind};
+use super::temporal::Temporal;
 use super::upsample::Upsample;
 use super::{FrameContext, Recorder, Stage};
 use crate::frame::{AoUniform, mip_size};
@@ -10,8 +11,9 @@ use crate::plan::PassId;
 use crate::settings::{AoEstimator, Settings, downsample_level};
 
 /// The obscurance: depth pyramids of the layers it reads, its constants, AV at the resolution it
-/// is computed at (when that is not the image's), raw AV, the blur's intermediate and blurred AV
-/// (f32 per pixel).
+/// is computed at (when that is not the image's), raw AV, the temporally filtered AV of the last
+/// and this frame (ping-pong, with the filter only), the blur's intermediate and blurred AV (f32
+/// per pixel).
 pub(crate) struct AoStage {
     two_layers: bool,
     pyramid: Pyramid,
@@ -21,6 +23,15 @@ pub(crate) struct AoStage {
     level: u32,
     low: Option<wgpu::Buffer>,
     raw: wgpu::Buffer,
+    /// The filtered AV (with the temporal filter), and which of them this (or, between frames,
+    /// the last) frame filters into.
+    history: Option<[wgpu::Buffer; 2]>,
+    current: usize,
+    /// Frames since the filter's history began (0: none), and its constants.
+    turn: u32,
+    temporal: Temporal,
+    /// Whether the filtered AV holds the last frame that ran the obscurance (or kept it).
+    continues: bool,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
 }
@@ -45,12 +56,18 @@ impl AoStage {
                 buffer("deep-gbuffer.pyramid.layer0", bytes),
                 buffer("deep-gbuffer.pyramid.layer1", bytes),
             ],
-            uniform: gpu::uniform_buffer(
-                device,
-                "deep-gbuffer.ao",
-                bytemuck::bytes_of(&AoUniform::new(&s.ao, pyramid.layout())),
-            ),
+            uniform: gpu::uniform_buffer_for::<AoUniform>(device, "deep-gbuffer.ao"),
             raw: buffer("deep-gbuffer.ao.raw", pixels),
+            history: s.ao.temporal().then(|| {
+                [
+                    buffer("deep-gbuffer.ao.history.a", pixels),
+                    buffer("deep-gbuffer.ao.history.b", pixels),
+                ]
+            }),
+            current: 0,
+            turn: 0,
+            temporal: Temporal::new(device, "deep-gbuffer.ao.temporal", false),
+            continues: false,
             scratch: buffer("deep-gbuffer.ao.blur", pixels),
             blurred: buffer("deep-gbuffer.ao.av", pixels),
             pyramid,
@@ -62,9 +79,40 @@ impl AoStage {
         self.two_layers
     }
 
+    /// Starts a frame that runs the obscurance: filters into the other history buffer and
+    /// writes the constants; `history`: the last frame's camera is known (no cut) and its
+    /// filtered AV may be used, if the last frame that ran (or kept) the obscurance was the
+    /// last frame; `still`: the frames in a row the view has stood still (the filter's weight,
+    /// [`AoSettings::history_weight`](crate::AoSettings::history_weight)).
+    pub(crate) fn prepare(&mut self, queue: &wgpu::Queue, s: &Settings, history: bool, still: u32) {
+        let history = history && self.continues && self.history.is_some();
+        self.current = 1 - self.current;
+        self.turn = if history { self.turn.wrapping_add(1).max(1) } else { 0 };
+        let uniform = AoUniform::for_frame(&s.ao, self.pyramid.layout(), self.turn);
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        let alpha = s.ao.history_weight(still);
+        self.temporal.prepare(queue, alpha, s.ao.history_tolerance, history);
+        self.continues = true;
+    }
+
+    /// Marks a frame that neither ran nor kept the obscurance: the next one starts afresh.
+    pub(crate) fn skipped(&mut self) {
+        self.continues = false;
+    }
+
+    /// The temporally filtered AV of this frame (the last, between frames), with the filter.
+    pub(crate) fn filtered(&self) -> Option<&wgpu::Buffer> {
+        self.history.as_ref().map(|h| &h[self.current])
+    }
+
+    /// AV as the blur reads it: filtered with the temporal filter, else raw.
+    fn unblurred(&self) -> &wgpu::Buffer {
+        self.filtered().unwrap_or(&self.raw)
+    }
+
     /// AV as the composite reads it (blurred unless the blur radius is 0).
     pub(crate) fn av(&self, s: &Settings) -> &wgpu::Buffer {
-        if s.ao.blur_radius > 0 { &self.blurred } else { &self.raw }
+        if s.ao.blur_radius > 0 { &self.blurred } else { self.unblurred() }
     }
 
     /// AV before the blur.
@@ -120,9 +168,15 @@ impl Stage for AoStage {
                     upsample.record(ctx, &mut pass, [low, &self.raw]);
                 }
             }
+            PassId::AoTemporal => {
+                let history = self.history.as_ref().expect("made with the temporal filter");
+                let (history_in, history_out) =
+                    (&history[1 - self.current], &history[self.current]);
+                self.temporal.record(ctx, &mut pass, [&self.raw, history_in, history_out]);
+            }
             PassId::AoBlur => {
                 let blur = Blur { radius: ctx.settings.ao.blur_radius, vec4: false };
-                blur.record(ctx, &mut pass, [&self.raw, &self.scratch, &self.blurred]);
+                blur.record(ctx, &mut pass, [self.unblurred(), &self.scratch, &self.blurred]);
             }
             other => unreachable!("{other} is not an obscurance pass"),
         }

@@ -5,8 +5,9 @@
 //! reads (scene, settings, plan) and what the stages before it wrote. The renderer prepares
 //! every stage the plan needs, then walks the plan and hands each pass to its stage.
 //!
-//! `blur`, `fill`, `present` and `pyramid` are kernels that stages share (the obscurance and the
-//! radiosity both blur; the raster and the shadow maps both fill).
+//! `blur`, `fill`, `present`, `pyramid` and `temporal` are kernels that stages share (the
+//! obscurance and the radiosity both blur and filter over time; the raster and the shadow maps
+//! both fill).
 
 pub(crate) mod ao;
 pub(crate) mod baseline;
@@ -24,6 +25,7 @@ pub(crate) mod raster;
 pub(crate) mod reflections;
 pub(crate) mod resolve;
 pub(crate) mod shadow;
+pub(crate) mod temporal;
 pub(crate) mod transparency;
 pub(crate) mod upsample;
 

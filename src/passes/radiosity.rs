@@ -3,6 +3,7 @@
 use super::blur::Blur;
 use super::offscreen::Offscreen;
 use super::pyramid::Pyramid;
+use super::temporal::Temporal;
 use super::upsample::Upsample;
 use super::{FrameContext, PointList, Recorder, Stage};
 use crate::frame::{RadiosityUniform, SourceTexel, mip_size};
@@ -66,6 +67,8 @@ pub(crate) struct RadiosityStage {
     current: usize,
     /// Frames since the history began.
     turn: u32,
+    /// The temporal filter's constants.
+    temporal: Temporal,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
     /// The layer-1 gather's buffers, made by the first frame that runs it.
@@ -107,6 +110,7 @@ impl RadiosityStage {
             ],
             current: 0,
             turn: 0,
+            temporal: Temporal::new(device, "deep-gbuffer.radiosity.temporal", true),
             scratch: buffer("deep-gbuffer.radiosity.blur"),
             blurred: buffer("deep-gbuffer.radiosity.blurred"),
             layer1: None,
@@ -153,6 +157,7 @@ impl RadiosityStage {
             ..RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn)
         };
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        self.temporal.prepare(queue, uniform.alpha, uniform.tolerance, history);
         if plan.contains(&PassId::RadiosityOffscreen) {
             let o = Offscreen::for_faces(self.offscreen.take(), device, offscreen);
             o.prepare(queue, self.turn, plan.layers);
@@ -201,7 +206,6 @@ impl Stage for RadiosityStage {
             (slot::SOURCE, &self.source),
             (slot::RAW, &self.gathered),
             (slot::HISTORY_IN, history_in),
-            (slot::HISTORY_OUT, history_out),
             (slot::PREV_VIS0, ctx.raster.previous_vis0()),
             // Only the passes that use the layer-1 gather read or write it; the blur's
             // scratch (unused here) stands in for it elsewhere.
@@ -275,7 +279,7 @@ impl Stage for RadiosityStage {
                 offscreen.record(ctx, &mut pass, &self.gathered);
             }
             PassId::RadiosityTemporal => {
-                dispatch(&mut pass, "radiosity_temporal", &entries, &[], ctx.size());
+                self.temporal.record(ctx, &mut pass, [&self.gathered, history_in, history_out]);
             }
             PassId::RadiosityBlur => {
                 let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
