@@ -16,6 +16,9 @@ struct Previous {
     // The point and its normal in the previous frame's view space.
     v: vec3<f32>,
     n: vec3<f32>,
+    // How far its surface's view depth runs over one pixel (depth_slope_span, linear in the
+    // pixels): found once for the pixels depth_at reads around it.
+    span: f32,
 }
 
 // Where the point of sample s at `pixel` was in the previous frame (false when off the screen
@@ -31,7 +34,7 @@ fn previous_point(pixel: vec2<u32>, s: GSample, out: ptr<function, Previous>) ->
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, vec2<f32>(pixel) + 0.5, s.depth), 1.0));
     let v = mat_mul(frame.prev_view, world).xyz;
     let n = mat_mul(frame.prev_view, vec4<f32>(s.normal, 0.0)).xyz;
-    *out = Previous(prev, v, n);
+    *out = Previous(prev, v, n, depth_slope_span(frame, v, n, 1.0));
     return true;
 }
 
@@ -47,7 +50,7 @@ fn depth_at(p: Previous, centre: vec2<f32>) -> f32 {
     let dir = view_position(frame, centre, 1.0) - o;
     let own = -p.v.z;
     let t = dot(p.v - o, p.n) / dot(dir, p.n);
-    let span = depth_slope_span(frame, p.v, p.n, length(centre - p.px));
+    let span = p.span * length(centre - p.px);
     return own + select(0.0, clamp(t - own, -span, span), abs(t) <= 3.0e38);
 }
 
