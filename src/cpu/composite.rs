@@ -6,7 +6,7 @@ use glam::{Vec3, Vec4};
 use crate::gbuffer::GSample;
 
 /// As `shaded`: the radiance the image shows at surface `s`, reflections left out: `direct`,
-/// the emission, and the diffuse albedo times `occlusion (E / pi + (1 - conf) AV ambient)`,
+/// the emission, and the diffuse albedo times `occlusion (E / pi + min(1 - conf, AV) ambient)`,
 /// where `irradiance` holds the gather's irradiance E (rgb) and coverage conf (w).
 pub fn shaded(s: &GSample, direct: Vec3, visibility: f32, irradiance: Vec4, ambient: Vec3) -> Vec3 {
     let confidence = irradiance.w.clamp(0.0, 1.0);
@@ -14,7 +14,7 @@ pub fn shaded(s: &GSample, direct: Vec3, visibility: f32, irradiance: Vec4, ambi
     let reflected = albedo
         * s.occlusion
         * (irradiance.truncate() / std::f32::consts::PI
-            + (1.0 - confidence) * visibility * ambient);
+            + (1.0 - confidence).min(visibility) * ambient);
     direct + reflected + s.emissive
 }
 
