@@ -214,3 +214,27 @@ fn direct_light_of_stored_gbuffers_matches_cpu_reference() {
         assert!(expected.iter().any(|c| c.max_element() > 0.01), "the view is lit");
     }
 }
+
+/// The ambient term fills the share of the hemisphere the radiosity gather left open, as much of
+/// it as the obscurance leaves open: the smaller of `1 - c` and AV (both estimate the open share
+/// from above and see the same surfaces, so their product would darken a crease twice); without
+/// the gather (`c = 0`) it is the paper's AV * ambient. (The GPU composite is held to this CPU
+/// twin by `cornell_direct_and_composite_match_cpu_reference`.)
+#[test]
+fn the_ambient_term_takes_the_smaller_open_share() {
+    let s = deep_gbuffer::gbuffer::GSample {
+        depth: 1.0,
+        base_color: Vec3::ONE,
+        occlusion: 1.0,
+        ..Default::default()
+    };
+    let ambient = Vec3::splat(0.5);
+    let share = |av: f32, c: f32| {
+        let e = glam::Vec4::new(0.0, 0.0, 0.0, c);
+        cpu_composite::shaded(&s, Vec3::ZERO, av, e, ambient).x / 0.5
+    };
+    for (av, c, open) in [(0.3, 0.6, 0.3), (0.9, 0.2, 0.8), (0.7, 0.0, 0.7), (1.0, 1.0, 0.0)] {
+        let got = share(av, c);
+        assert!((got - open).abs() < 1e-6, "AV {av}, coverage {c}: {got}, not {open}");
+    }
+}
