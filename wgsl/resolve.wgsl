@@ -85,10 +85,13 @@ fn shade(pixel: vec2<u32>) -> GSample {
     if OBJECT_MOTION && 3u * frame.vertex_count <= arrayLength(&previous_positions) {
         was = previous_vertex(i0) * bary.x + previous_vertex(i1) * bary.y + previous_vertex(i2) * bary.z;
     }
+    // Both ends projected alike: the point's own place on screen now (its pixel centre up to the
+    // rounding of the barycentrics), not the pixel centre, so that a still point's motion is 0.
     let pc = mat_mul(frame.prev_view_proj, vec4<f32>(was, 1.0));
-    if pc.w > 1e-20 {
-        let prev = clip_to_pixel(pc, vec2<f32>(f32(frame.width), f32(frame.height)));
-        let motion = vec2<f32>(pixel) + 0.5 - prev;
+    let nc = mat_mul(frame.view_proj, vec4<f32>(world, 1.0));
+    if pc.w > 1e-20 && nc.w > 1e-20 {
+        let size = vec2<f32>(f32(frame.width), f32(frame.height));
+        let motion = clip_to_pixel(nc, size) - clip_to_pixel(pc, size);
         if all(abs(motion) < vec2<f32>(1e30)) {
             s.motion = motion;
         }

@@ -402,9 +402,9 @@ pub fn resolve_pixel_moved(
         _ => world,
     };
     let pc = mat_mul(&f.prev_view_proj, was.extend(1.0).to_array());
-    if pc.w > 1e-20 {
-        let prev = clip_to_pixel(pc, image_size(f));
-        let motion = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - prev;
+    let nc = mat_mul(&f.view_proj, world.extend(1.0).to_array());
+    if pc.w > 1e-20 && nc.w > 1e-20 {
+        let motion = clip_to_pixel(nc, image_size(f)) - clip_to_pixel(pc, image_size(f));
         if motion.abs().cmplt(Vec2::splat(1e30)).all() {
             s.motion = motion;
         }

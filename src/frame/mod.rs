@@ -129,6 +129,9 @@ pub struct FrameUniform {
     pub inv_view: [[f32; 4]; 4],
     /// The previous frame's world to view.
     pub prev_view: [[f32; 4]; 4],
+    /// World to clip, made as [`prev_view_proj`](FrameUniform::prev_view_proj) is (so that a
+    /// point's motion under a still camera is exactly 0).
+    pub view_proj: [[f32; 4]; 4],
     /// The previous frame's world to clip.
     pub prev_view_proj: [[f32; 4]; 4],
     /// Reprojection of a fragment at pixel coordinate (x, y) and view depth d to the previous
@@ -192,7 +195,7 @@ impl crate::settings::PositionEncoding {
 /// it the geometry is taken as still, and only the camera moves).
 pub const FRAME_OBJECT_MOTION: u32 = 8;
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 7 * 64 + 12 * 4);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 8 * 64 + 12 * 4);
 
 mirrored!(
     FrameUniform,
@@ -203,6 +206,7 @@ mirrored!(
         proj,
         inv_view,
         prev_view,
+        view_proj,
         prev_view_proj,
         reproject_scaled,
         reproject_fixed,
@@ -313,6 +317,7 @@ impl FrameUniform {
             proj: current.proj.to_cols_array_2d(),
             inv_view: current.view.inverse().to_cols_array_2d(),
             prev_view: previous.view.to_cols_array_2d(),
+            view_proj: (current.proj * current.view).to_cols_array_2d(),
             prev_view_proj: (previous.proj * previous.view).to_cols_array_2d(),
             reproject_scaled,
             reproject_fixed,

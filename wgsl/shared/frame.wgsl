@@ -4,6 +4,9 @@ struct Frame {
     proj: mat4x4<f32>,
     inv_view: mat4x4<f32>,
     prev_view: mat4x4<f32>,
+    // World to clip, this frame's and the previous frame's, each one product made on the CPU the
+    // same way, so that a point's motion under a still camera is exactly 0.
+    view_proj: mat4x4<f32>,
     prev_view_proj: mat4x4<f32>,
     // A fragment's previous clip position and view depth, affine in (d x, d y, d) and (x, y, 1):
     // see `reproject`.
