@@ -71,9 +71,10 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
     }
     let f = p.px - 0.5;
     let base = vec2<i32>(floor(f));
-    // Less than the rasterizer's 1/256 pixel from a pixel centre is that centre: a still
-    // camera's motion is 0 up to the rounding of the reprojection, and a neighbour must not
-    // lend its history to a point uncovered where the camera did not move.
+    // Less than the rasterizer's 1/256 pixel from a pixel centre is that centre: a motion the
+    // raster cannot resolve moves nothing, and a neighbour's sliver of weight must not lend its
+    // history to a point uncovered where the camera did not move (a still camera's motion is 0
+    // exactly: wgsl/resolve.wgsl).
     var t = f - vec2<f32>(base);
     t = select(t, round(t), abs(t - round(t)) < vec2<f32>(1.0 / 256.0));
     let size = vec2<i32>(i32(frame.width), i32(frame.height));
