@@ -420,8 +420,8 @@ fn a_static_camera_converges_and_a_cut_resets() {
     assert_eq!(after_cut, frames[0], "after a cut the history does not leak into the frame");
 }
 
-/// A slanted surface keeps its history when the camera turns: the pixel centre nearest to where
-/// a point was lies up to sqrt(1/2) pixels from it, and a surface seen at a slant runs on in
+/// A slanted surface keeps its history when the camera turns: the pixel centres around where a
+/// point was lie up to a pixel and a half from it, and a surface seen at a slant runs on in
 /// depth by its slope over that distance, more than the history's 1 cm at this size. (That a
 /// surface uncovered beside one that moved away takes none is `temporal_cut_and_an_object_moving_away`
 /// in tests/hard_cases.rs.)
@@ -440,9 +440,10 @@ fn slanted_surfaces_keep_their_history_under_a_turn() {
     // Without history the filter passes the frame's own gather on unchanged.
     let afresh = surface.iter().filter(|&&p| filtered[p] == raw[p]).count();
     eprintln!("{afresh} of {} surface pixels start afresh after a 1 degree turn", surface.len());
-    // What must start afresh: the strip the turn brings in at the screen's edge and the points
-    // beside the blocks' edges that were hidden, 52 of 2334 pixels here; with 1 cm alone, 961
-    // (the floor, the ceiling and the side walls).
+    // 1 of 2334 pixels here (the points beside the blocks' edges that were hidden find a pixel
+    // of their own surface among the four the history is read from; 52 when it was read from
+    // the nearest alone); with 1 cm from the point's own depth, 953 (the floor, the ceiling
+    // and the side walls).
     assert!(afresh * 20 < surface.len(), "{afresh} of {} start afresh", surface.len());
 }
 

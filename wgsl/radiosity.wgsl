@@ -192,7 +192,7 @@ fn finite3(v: vec3<f32>) -> bool {
 alias Value = vec4<f32>;
 
 fn usable(v: Value) -> bool {
-    return finite3(v.rgb) && v.a >= 0.0 && v.a <= 1.0;
+    return usable_irradiance(v);
 }
 
 #include "shared/history.wgsl"

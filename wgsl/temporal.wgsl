@@ -20,9 +20,8 @@
 alias Value = vec4<f32>;
 const EMPTY: Value = vec4<f32>(0.0);
 
-// Irradiance (finite) and the share of the hemisphere it covers (in [0, 1]).
 fn usable(v: Value) -> bool {
-    return all(abs(v.rgb) <= vec3<f32>(3.0e38)) && v.a >= 0.0 && v.a <= 1.0;
+    return usable_irradiance(v);
 }
 #else
 alias Value = f32;

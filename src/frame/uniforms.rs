@@ -47,28 +47,24 @@ mirrored!(
 );
 
 impl AoUniform {
-    /// The constants for `settings` over a pyramid of `layout`.
-    pub fn new(settings: &AoSettings, layout: &PyramidLayout) -> Self {
+    /// The constants for `settings` over a pyramid of `layout`, in a frame `turn` frames into
+    /// the temporal filter's history (0: without one), with the slices and taps that frame
+    /// takes ([`AoSettings::frame_taps`]).
+    pub fn new(settings: &AoSettings, layout: &PyramidLayout, turn: u32) -> Self {
+        let (slices, samples) = settings.frame_taps(turn > 0);
         AoUniform {
             radius: settings.radius,
             bias: settings.bias,
             intensity: settings.intensity,
-            samples: settings.samples,
+            samples,
             levels: layout.levels.len().min(8) as u32,
             mip_offset: settings.mip_offset,
-            slices: settings.slices,
+            slices,
             thickness: settings.solid_depth(),
-            turn: 0,
+            turn,
             _pad: [0; 3],
             offsets: level_offsets(layout),
         }
-    }
-
-    /// The constants of a frame `turn` frames into the temporal filter's history (0: without
-    /// one), with the slices and taps that frame takes ([`AoSettings::frame_taps`]).
-    pub fn for_frame(settings: &AoSettings, layout: &PyramidLayout, turn: u32) -> Self {
-        let (slices, samples) = settings.frame_taps(turn > 0);
-        AoUniform { turn, slices, samples, ..AoUniform::new(settings, layout) }
     }
 }
 

@@ -88,7 +88,7 @@ impl AoStage {
         let history = history && self.continues && self.history.is_some();
         self.current = 1 - self.current;
         self.turn = if history { self.turn.wrapping_add(1).max(1) } else { 0 };
-        let uniform = AoUniform::for_frame(&s.ao, self.pyramid.layout(), self.turn);
+        let uniform = AoUniform::new(&s.ao, self.pyramid.layout(), self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let alpha = s.ao.history_weight(still);
         self.temporal.prepare(queue, alpha, s.ao.history_tolerance, history);

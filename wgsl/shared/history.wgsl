@@ -9,6 +9,12 @@
 // value may enter this frame (finite and within its range).
 // Needs shared/frame.wgsl, shared/gbuffer.wgsl, shared/spiral.wgsl and shared/vis.wgsl.
 
+// Whether a stored irradiance and coverage (the radiosity's values) may enter a frame: the
+// irradiance finite, the share of the hemisphere it covers in [0, 1].
+fn usable_irradiance(v: vec4<f32>) -> bool {
+    return all(abs(v.rgb) <= vec3<f32>(3.0e38)) && v.a >= 0.0 && v.a <= 1.0;
+}
+
 // Where the point of a sample was in the previous frame.
 struct Previous {
     // Its position in the previous frame's pixels.
