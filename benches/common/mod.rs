@@ -11,13 +11,18 @@ use deep_gbuffer::{Camera, Renderer, Scene, SceneBuffers};
 /// A scene by benchmark name: `engine` (the 2CylinderEngine fixture) or any `builtin:` name.
 pub fn load(name: &str) -> Scene {
     match name {
-        "engine" => Scene::load(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("fixtures/engine/2CylinderEngine.gltf"),
-        ),
+        "engine" => Scene::load(&repo_path("fixtures/engine/2CylinderEngine.gltf")),
         other => Scene::from_spec(&format!("builtin:{other}")),
     }
     .unwrap_or_else(|e| panic!("scene {name}: {e}"))
+}
+
+/// `relative` inside the crate's folder where the benchmark was built, or inside the working
+/// directory where that folder is gone: a bench binary carried to a machine without the sources'
+/// path (a GPU machine without Rust, `scripts/gpu-report.sh`) runs from a copy of the repository.
+pub fn repo_path(relative: &str) -> std::path::PathBuf {
+    let built = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    if built.is_dir() { built.join(relative) } else { std::path::PathBuf::from(relative) }
 }
 
 /// The comma-separated list in environment variable `var`, or `default`.
@@ -118,7 +123,10 @@ pub fn fit(points: &[(f64, f64)]) -> (f64, f64) {
 /// Prints `table` and writes it to `target/<file>`.
 pub fn write_summary(file: &str, table: &str) {
     println!("\n{table}");
-    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target").join(file);
+    let out = repo_path("target").join(file);
+    if let Some(dir) = out.parent() {
+        let _ = std::fs::create_dir_all(dir);
+    }
     if let Err(e) = std::fs::write(&out, table) {
         eprintln!("could not write {}: {e}", out.display());
     }
