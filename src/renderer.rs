@@ -850,7 +850,10 @@ impl Renderer {
         });
         let st = &mut self.stages;
         let kept = plan.reused.iter().any(PassId::is_gbuffer);
-        st.raster.prepare(device, queue, scene, next.as_ref(), kept);
+        // The largest target the rasterizer draws: the image or a shadow-map face.
+        let face = u64::from(s.shadows.resolution).pow(2);
+        let targets = (u64::from(s.width) * u64::from(s.height)).max(face);
+        st.raster.prepare(device, queue, (scene, targets), next.as_ref(), kept);
         if plan.runs(Effect::Shadows) {
             let shadows = ShadowStage::for_plan(st.shadows.take(), device, s, scene, plan)?;
             shadows.prepare(queue, scene);

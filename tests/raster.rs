@@ -192,9 +192,13 @@ fn grid(n: usize, lo: f32, hi: f32, z: f32, jitter: f32, seed: u64) -> Scene {
 }
 
 fn coverage(scene: &Scene, frame: &FrameUniform) -> Vec<u32> {
+    coverage_shared_out(scene, frame, RasterWork::Auto)
+}
+
+fn coverage_shared_out(scene: &Scene, frame: &FrameUniform, work: RasterWork) -> Vec<u32> {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g.device, scene).unwrap();
-    deep_gbuffer::testing::coverage_counts(&g.device, &g.queue, &buffers, frame).unwrap()
+    deep_gbuffer::testing::coverage_counts(&g.device, &g.queue, &buffers, frame, work).unwrap()
 }
 
 fn frame_for(scene: &Scene, camera: &Camera, width: u32, height: u32) -> FrameUniform {
@@ -453,6 +457,30 @@ fn vertices_far_off_screen_cover_exactly_the_right_pixels() {
     assert!(r.vis0.iter().all(|&w| w != VIS_EMPTY), "the huge triangle covers the whole view");
     let counts = coverage(&scene, &r.frame);
     assert_eq!(counts, cpu::coverage_counts(&r.frame, &input));
+}
+
+#[test]
+fn triangles_past_the_work_items_room_take_the_slices_left_and_lose_nothing() {
+    // 80 triangles that each cover the whole 512x512 view (1024 tiles): shared out as on a GPU
+    // (a slice per 8 tiles) each asks for 127 work items past its first slice, 10160 in all,
+    // and the rasterizer holds 80 + 4096 for the triangles and 4096 for the target's tiles
+    // (`bin_sizes`), 8272. The triangles binned last get the items left or none, so their
+    // workgroups walk more tiles; every pixel must still be counted once per triangle, as the
+    // CPU counts it.
+    let n = 80;
+    let tris: Vec<[Vec3; 3]> = (0..n)
+        .map(|i| {
+            let z = -1.0 + 0.02 * i as f32;
+            [Vec3::new(-4.0, -4.0, z), Vec3::new(4.0, -4.0, z), Vec3::new(0.0, 4.0, z)]
+        })
+        .collect();
+    let scene = soup(&tris, true);
+    let camera = ortho(2.0);
+    let frame = frame_for(&scene, &camera, 512, 512);
+    let counts = coverage_shared_out(&scene, &frame, RasterWork::Gpu);
+    assert!(counts.iter().all(|&c| c == n), "every pixel covered {n} times");
+    let ds = double_sided_triangles(&scene);
+    assert_eq!(counts, cpu::coverage_counts(&frame, &RasterInput::new(&scene, &ds)));
 }
 
 #[test]

@@ -59,8 +59,6 @@ override TILES_PER_SLICE: u32 = 8u;
 // a tile's threads take that branch together; a driver that runs both sides of every branch
 // only pays for the test (`RasterWork`). The pixels drawn are the same either way.
 override TILE_TEST: bool = true;
-// A work item whose slot was reserved but not written (its triangle fell back to one slice).
-const NO_ITEM: u32 = 0xffffffffu;
 const MAX_POLY: u32 = 9u;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -85,7 +83,7 @@ struct Binned {
     q: vec3<f32>,
 }
 @group(0) @binding(6) var<storage, read_write> large: array<Binned>;
-// Slices 1.. of binned triangles: (entry, slice), or (NO_ITEM, 0).
+// Slices 1.. of binned triangles: (entry, slice).
 @group(0) @binding(13) var<storage, read_write> items: array<vec2<u32>>;
 @group(0) @binding(7) var<storage, read_write> args: array<u32>;
 #if WRITE_L0
@@ -541,9 +539,9 @@ fn tile_span(s: Setup) -> vec2<u32> {
     return vec2<u32>((s.hi - s.lo) / 16 + 1);
 }
 
-// Stores s's set-up in `large` and appends its slices past the first to `items`. Without room
-// for its slices the triangle is drawn by one workgroup (slower, never lost); without room for
-// its entry it is dropped and counted.
+// Stores s's set-up in `large` and appends its slices past the first to `items`. Where the room
+// left holds only some of its slices the triangle takes those (its workgroups each walk more
+// tiles: slower, never lost); without room for its entry it is dropped and counted.
 fn bin_triangle(s: Setup, t: u32) {
     let entry = atomicAdd(&bins[0], 1u);
     if entry >= arrayLength(&large) {
@@ -553,15 +551,15 @@ fn bin_triangle(s: Setup, t: u32) {
     let tiles = tile_span(s);
     var slices = (tiles.x * tiles.y + TILES_PER_SLICE - 1u) / TILES_PER_SLICE;
     if slices > 1u {
+        // Every item below min(total asked, room) is written by the triangle that reserved it,
+        // so `bin_args` dispatches no unwritten item.
         let room = arrayLength(&items);
         let base = atomicAdd(&bins[4], slices - 1u);
-        let fits = base < room && slices - 1u <= room - base;
-        for (var i = 1u; i < slices && base + i - 1u < room; i++) {
-            items[base + i - 1u] = select(vec2<u32>(NO_ITEM, 0u), vec2<u32>(entry, i), fits);
+        let got = select(0u, min(slices - 1u, room - base), base < room);
+        for (var i = 0u; i < got; i++) {
+            items[base + i] = vec2<u32>(entry, i + 1u);
         }
-        if !fits {
-            slices = 1u;
-        }
+        slices = got + 1u;
     }
     large[entry] = Binned(s.v0, s.v1, s.v2, t, slices, s.r, s.q);
 }
@@ -626,9 +624,6 @@ fn raster_large(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation
         let item = items[group - entries];
         entry = item.x;
         slice = item.y;
-        if entry == NO_ITEM {
-            return;
-        }
     }
     let b = large[entry];
     var s: Setup;

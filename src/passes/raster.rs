@@ -62,13 +62,18 @@ const ENTRY_BYTES: u64 = 64;
 /// Bytes of a work item (`items`: entry and slice).
 const ITEM_BYTES: u64 = 8;
 
-/// Binned triangles and work items with room for `triangles` triangles: one entry per triangle
-/// plus slack for clipped sub-triangles (only triangles over 16 pixels across are binned), as
-/// many work items, each within `limit` bytes.
-fn bin_sizes(triangles: u32, limit: u64) -> (u64, u64) {
-    let count = u64::from(triangles) + 4096;
-    let within = |size: u64| (count * size).min(limit / size * size);
-    (within(ENTRY_BYTES), within(ITEM_BYTES))
+/// Binned triangles and work items with room for `triangles` triangles drawn into targets of up
+/// to `pixels` pixels, each within `limit` bytes: one entry per triangle plus slack for clipped
+/// sub-triangles (only triangles over 16 pixels across are binned), and as many work items plus
+/// four per 16x16 tile of the target. A triangle takes a slice per `TILES_PER_SLICE` (8) tiles of
+/// its bounds, so the tiles' share holds the slices of 32 triangles whose bounds cover the
+/// target: few large triangles (a room's walls at 3840x2160) each get their slices, where room
+/// for the triangle count alone left them one workgroup each.
+fn bin_sizes(triangles: u32, pixels: u64, limit: u64) -> (u64, u64) {
+    let entries = u64::from(triangles) + 4096;
+    let items = entries + pixels.div_ceil(256) * 4;
+    let within = |count: u64, size: u64| (count * size).min(limit / size * size);
+    (within(entries, ENTRY_BYTES), within(items, ITEM_BYTES))
 }
 
 /// One raster step: the camera it draws with, what it writes, and the buffers it writes
@@ -186,10 +191,10 @@ impl Rasterizer {
         }
     }
 
-    /// Makes the bins large enough for `scene`.
-    pub(crate) fn reserve(&mut self, device: &wgpu::Device, scene: &SceneBuffers) {
+    /// Makes the bins large enough for `scene` drawn into targets of up to `pixels` pixels.
+    pub(crate) fn reserve(&mut self, device: &wgpu::Device, scene: &SceneBuffers, pixels: u64) {
         let limit = device.limits().max_storage_buffer_binding_size;
-        let (entries, items) = bin_sizes(scene.triangle_count(), limit);
+        let (entries, items) = bin_sizes(scene.triangle_count(), pixels, limit);
         let usage = wgpu::BufferUsages::empty();
         if self.large.size() < entries {
             self.large = gpu::storage_buffer(device, "deep-gbuffer.raster.large", entries, usage);
@@ -319,18 +324,19 @@ impl RasterStage {
         }
     }
 
-    /// Starts a frame: the bins fit `scene`, and this frame writes the other layer-0 buffer, or
-    /// with `kept` (a still frame) keeps the last frame's layers; `next`: the frame uniform
-    /// `raster.next` draws with, when the plan runs it.
+    /// Starts a frame: the bins fit `scene` drawn into targets of up to `pixels` pixels (the
+    /// image, a shadow-map face), and this frame writes the other layer-0 buffer, or with `kept`
+    /// (a still frame) keeps the last frame's layers; `next`: the frame uniform `raster.next`
+    /// draws with, when the plan runs it.
     pub(crate) fn prepare(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        scene: &SceneBuffers,
+        (scene, pixels): (&SceneBuffers, u64),
         next: Option<&FrameUniform>,
         kept: bool,
     ) {
-        self.rasterizer.reserve(device, scene);
+        self.rasterizer.reserve(device, scene, pixels);
         self.kept = kept;
         if !kept {
             self.current = 1 - self.current;
@@ -441,19 +447,21 @@ impl Stage for RasterStage {
     }
 }
 
-/// Runs the `COUNT` variant: how many fragments cover each pixel (every covered pixel centre of
-/// every triangle, no depth test). Watertightness tests read it; it waits for the GPU.
+/// Runs the `COUNT` variant with its work shared out as `work` says: how many fragments cover
+/// each pixel (every covered pixel centre of every triangle, no depth test). Watertightness tests
+/// read it; it waits for the GPU.
 pub fn coverage_counts(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &SceneBuffers,
     frame: &FrameUniform,
+    work: RasterWork,
 ) -> crate::Result<Vec<u32>> {
     let pixels = u64::from(frame.width) * u64::from(frame.height);
     let uniform =
         gpu::uniform_buffer(device, "deep-gbuffer.raster.count.frame", bytemuck::bytes_of(frame));
-    let mut rasterizer = Rasterizer::new(device, false, RasterWork::Auto);
-    rasterizer.reserve(device, scene);
+    let mut rasterizer = Rasterizer::new(device, false, work);
+    rasterizer.reserve(device, scene, pixels);
     let counts = gpu::storage_buffer(
         device,
         "deep-gbuffer.raster.count.counts",
