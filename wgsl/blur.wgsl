@@ -9,6 +9,7 @@
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
 #include "shared/bilateral.wgsl"
+#include "shared/value.wgsl"
 
 
 // The radius in pixels, fixed per pipeline. A pipeline constant, not a uniform: lavapipe
@@ -18,12 +19,6 @@ override RADIUS: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
-#if VEC4
-alias Value = vec4<f32>;
-#else
-alias Value = f32;
-#endif
-
 @group(0) @binding(3) var<storage, read> source: array<Value>;
 @group(0) @binding(4) var<storage, read_write> blurred: array<Value>;
 
@@ -47,6 +42,7 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #endif
     let r = i32(RADIUS);
     let sigma = max(f32(r), 1.0) * 0.5;
+    let own = source[p];
     var sum = Value(0.0);
     var weights = 0.0;
     for (var k = -r; k <= r; k++) {
@@ -63,8 +59,8 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let fk = f32(k);
         let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
         let w = gauss * bilateral_weight(z, gword_normal(word), zc, gword_normal(centre));
-        sum += w * source[q];
+        sum += w * (source[q] - own);
         weights += w;
     }
-    blurred[p] = select(source[p], sum / weights, weights > 0.0);
+    blurred[p] = select(own, bounded(own + sum / weights), weights > 0.0);
 }

@@ -189,7 +189,7 @@ fn finite3(v: vec3<f32>) -> bool {
 
 // The filtered history's values (shared/history.wgsl): irradiance and coverage, as
 // wgsl/temporal.wgsl keeps them.
-alias Value = vec4<f32>;
+#include "shared/irradiance.wgsl"
 
 fn usable(v: Value) -> bool {
     return usable_irradiance(v);

@@ -15,16 +15,15 @@
 #include "shared/gbuffer_read.wgsl"
 #include "shared/spiral.wgsl"
 #include "shared/vis.wgsl"
+#include "shared/value.wgsl"
 
 #if VEC4
-alias Value = vec4<f32>;
 const EMPTY: Value = vec4<f32>(0.0);
 
 fn usable(v: Value) -> bool {
     return usable_irradiance(v);
 }
 #else
-alias Value = f32;
 const EMPTY: Value = 1.0;
 
 // A visibility in [0, 1].
@@ -66,7 +65,9 @@ fn temporal_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var valid = false;
     let h = history_at(gid.xy, sample_at(p), params.history != 0u, params.tolerance, &valid);
     if valid {
-        v = mix(v, h, params.alpha);
+        // mix(v, h, alpha), exactly v where the history equals it, kept in range
+        // (shared/value.wgsl).
+        v = bounded(v + (h - v) * params.alpha);
     }
     history_out[p] = select(EMPTY, v, usable(v));
 }

@@ -14,6 +14,7 @@
 #include "shared/gbuffer.wgsl"
 #include "shared/mip.wgsl"
 #include "shared/bilateral.wgsl"
+#include "shared/value.wgsl"
 
 
 // The level the effect was computed at (1: half, 2: quarter resolution) and the value of pixels
@@ -23,12 +24,6 @@ override EMPTY: f32 = 0.0;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(2) var<storage, read> gbuffer: array<GWord>;
-#if VEC4
-alias Value = vec4<f32>;
-#else
-alias Value = f32;
-#endif
-
 @group(0) @binding(3) var<storage, read> low: array<Value>;
 @group(0) @binding(4) var<storage, read_write> full: array<Value>;
 
@@ -73,6 +68,8 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let at = (vec2<f32>(gid.xy) + 0.5) / f32(1u << LEVEL) - 0.5;
     let base = floor(at);
     let f = at - base;
+    // The weighted mean about the first valid texel's value (shared/value.wgsl).
+    var reference = Value(EMPTY);
     var sum = Value(0.0);
     var weights = 0.0;
     for (var j = 0u; j < 4u; j++) {
@@ -81,12 +78,15 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let c = candidate(t, size, z, n);
         if c.valid {
             let b = select(1.0 - f, f, corner > vec2<f32>(0.5));
-            sum += b.x * b.y * c.weight * c.value;
+            if !(weights > 0.0) {
+                reference = c.value;
+            }
+            sum += b.x * b.y * c.weight * (c.value - reference);
             weights += b.x * b.y * c.weight;
         }
     }
     if weights > 0.0 {
-        full[p] = sum / weights;
+        full[p] = bounded(reference + sum / weights);
         return;
     }
     // No texel of the four stands for this surface (a thin strip, or an edge the rotated grid
@@ -98,7 +98,10 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let t = vec2<u32>(clamp(base + vec2<f32>(f32(j & 3u), f32(j >> 2u)) - 1.0, vec2<f32>(0.0), last));
         let c = candidate(t, size, z, n);
         if c.valid {
-            sum += c.weight * c.value;
+            if !(weights > 0.0) {
+                reference = c.value;
+            }
+            sum += c.weight * (c.value - reference);
             weights += c.weight;
             if c.gap < nearest_gap {
                 nearest_gap = c.gap;
@@ -106,5 +109,5 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    full[p] = select(nearest, sum / weights, weights > 0.0);
+    full[p] = select(nearest, bounded(reference + sum / weights), weights > 0.0);
 }

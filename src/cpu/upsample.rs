@@ -1,7 +1,7 @@
 //! CPU reference of `wgsl/upsample.wgsl`: the depth- and normal-aware upsample of an effect
 //! computed at a level of the rotated grid.
 
-use std::ops::{Add, Div, Mul};
+use std::ops::{Add, Div, Mul, Sub};
 
 use crate::cpu::blur::bilateral_weight;
 use crate::cpu::pyramid::{mip_origin, mip_size};
@@ -29,7 +29,9 @@ fn candidate<T: Copy>(
 
 /// Every pixel of a `width` x `height` image from `low`, the effect computed at `level` (texel t
 /// at the pixel `mip_origin(level, t)`), guided by the layer-0 `samples`; pixels without a
-/// surface, or whose 4x4 texels have none, take `empty`.
+/// surface, or whose 4x4 texels have none, take `empty`. The weighted means are taken about the
+/// first valid texel's value, as the kernel takes them (`wgsl/shared/value.wgsl`; the kernel
+/// also clamps them to the range of what it carries, which values here need not keep).
 pub fn upsample<T>(
     width: u32,
     height: u32,
@@ -39,7 +41,7 @@ pub fn upsample<T>(
     low: &[T],
 ) -> Vec<T>
 where
-    T: Copy + Add<Output = T> + Mul<f32, Output = T> + Div<f32, Output = T>,
+    T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T> + Div<f32, Output = T>,
 {
     let size = mip_size(width, height, level);
     let scale = (1u32 << level) as f32;
@@ -57,26 +59,32 @@ where
             let at = ((x as f32 + 0.5) / scale - 0.5, (y as f32 + 0.5) / scale - 0.5);
             let base = (at.0.floor(), at.1.floor());
             let f = (at.0 - base.0, at.1 - base.1);
-            let (mut sum, mut weights) = (empty * 0.0, 0.0f32);
+            let (mut reference, mut sum, mut weights) = (empty, empty * 0.0, 0.0f32);
             for j in 0..4u32 {
                 let corner = ((j & 1) as f32, (j >> 1) as f32);
                 let t = texel(base.0 + corner.0, base.1 + corner.1);
                 if let Some((value, _, weight)) = candidate(image, t, size, s, samples, low) {
                     let bx = if corner.0 > 0.5 { f.0 } else { 1.0 - f.0 };
                     let by = if corner.1 > 0.5 { f.1 } else { 1.0 - f.1 };
-                    sum = sum + value * (bx * by * weight);
+                    if weights <= 0.0 {
+                        reference = value;
+                    }
+                    sum = sum + (value - reference) * (bx * by * weight);
                     weights += bx * by * weight;
                 }
             }
             if weights > 0.0 {
-                out.push(sum / weights);
+                out.push(reference + sum / weights);
                 continue;
             }
             let (mut nearest, mut nearest_gap) = (empty, 3.0e38f32);
             for j in 0..16u32 {
                 let t = texel(base.0 + (j & 3) as f32 - 1.0, base.1 + (j >> 2) as f32 - 1.0);
                 if let Some((value, gap, weight)) = candidate(image, t, size, s, samples, low) {
-                    sum = sum + value * weight;
+                    if weights <= 0.0 {
+                        reference = value;
+                    }
+                    sum = sum + (value - reference) * weight;
                     weights += weight;
                     if gap < nearest_gap {
                         nearest_gap = gap;
@@ -84,7 +92,7 @@ where
                     }
                 }
             }
-            out.push(if weights > 0.0 { sum / weights } else { nearest });
+            out.push(if weights > 0.0 { reference + sum / weights } else { nearest });
         }
     }
     out

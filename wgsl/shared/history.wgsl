@@ -84,6 +84,8 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
     var t = f - vec2<f32>(base);
     t = select(t, round(t), abs(t - round(t)) < vec2<f32>(1.0 / 256.0));
     let size = vec2<i32>(i32(frame.width), i32(frame.height));
+    // The mean about the first usable value (shared/value.wgsl).
+    var reference = Value();
     var sum = Value();
     var weight = 0.0;
     for (var k = 0u; k < 4u; k++) {
@@ -100,7 +102,10 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
         }
         let h = history_in[q];
         if usable(h) {
-            sum += w * h;
+            if !(weight > 0.0) {
+                reference = h;
+            }
+            sum += w * (h - reference);
             weight += w;
         }
     }
@@ -108,5 +113,5 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
         return Value();
     }
     *valid = true;
-    return sum / weight;
+    return bounded(reference + sum / weight);
 }
