@@ -9,9 +9,9 @@
 #                                                binary (four at a time), one log each in LOG_DIR
 #                                                (default target/gpu-tests), and prints a summary
 #
-# The binaries find `fixtures/` through the path they were built at; `run` links that path to
-# the repository it runs from when they differ. `cli` and `hostile` run the command-line binary
-# and are left out.
+# The binaries find `fixtures/` and the command-line binary (`cli`, `hostile`) through the path
+# they were built at; `run` links that path to the repository it runs from when they differ and
+# puts the packed command-line binary at target/debug/deep-gbuffer where none is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,14 +20,14 @@ pack)
     archive=${2:-target/gpu-tests.tar.xz}
     cargo test --all-features --no-run
     staging=$(mktemp -d)
-    mkdir "$staging/t"
+    mkdir -p "$staging/t/bin"
     for file in tests/*.rs; do
         name=$(basename "$file" .rs)
-        case "$name" in cli | hostile) continue ;; esac
         binary=$(ls -t target/debug/deps/"$name"-* | grep -v '\.d$' | head -n 1)
         cp "$binary" "$staging/t/$name"
     done
-    strip "$staging"/t/*
+    cp target/debug/deep-gbuffer "$staging/t/bin/"
+    find "$staging/t" -type f -exec strip {} +
     # Where the binaries look for the fixtures.
     pwd > "$staging/t/built-at"
     tar cf - -C "$staging" t | xz -T0 -9 > "$archive"
@@ -45,9 +45,11 @@ run)
         mkdir -p "$(dirname "$built")"
         ln -s "$PWD" "$built"
     fi
+    mkdir -p target/debug
+    [ -e target/debug/deep-gbuffer ] || cp "$unpacked/t/bin/deep-gbuffer" target/debug/
     for binary in "$unpacked"/t/*; do
         name=$(basename "$binary")
-        [ "$name" = built-at ] && continue
+        [ -f "$binary" ] && [ "$name" != built-at ] || continue
         ("$binary" --test-threads 8 > "$logs/$name.log" 2>&1; echo "rc=$?" >> "$logs/$name.log") &
         while [ "$(jobs -r | wc -l)" -ge 4 ]; do sleep 0.2; done
     done
