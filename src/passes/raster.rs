@@ -65,10 +65,11 @@ const ITEM_BYTES: u64 = 8;
 /// Binned triangles and work items with room for `triangles` triangles drawn into targets of up
 /// to `pixels` pixels, each within `limit` bytes: one entry per triangle plus slack for clipped
 /// sub-triangles (only triangles over 16 pixels across are binned), and as many work items plus
-/// four per 16x16 tile of the target. A triangle takes a slice per `TILES_PER_SLICE` (8) tiles of
-/// its bounds, so the tiles' share holds the slices of 32 triangles whose bounds cover the
-/// target: few large triangles (a room's walls at 3840x2160) each get their slices, where room
-/// for the triangle count alone left them one workgroup each.
+/// four per 16x16 tile of the target. A triangle takes a slice per `TILES_PER_SLICE` tiles of its
+/// bounds (8 shared out as on a GPU, 64 on a CPU driver), so at 8 the tiles' share holds the
+/// slices of 32 triangles whose bounds cover the target: few large triangles (a room's walls at
+/// 3840x2160) each get their slices, where room for the triangle count alone left them one
+/// workgroup each.
 fn bin_sizes(triangles: u32, pixels: u64, limit: u64) -> (u64, u64) {
     let entries = u64::from(triangles) + 4096;
     let items = entries + pixels.div_ceil(256) * 4;
