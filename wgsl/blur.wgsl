@@ -42,9 +42,7 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #endif
     let r = i32(RADIUS);
     let sigma = max(f32(r), 1.0) * 0.5;
-    let own = source[p];
-    var sum = Value(0.0);
-    var weights = 0.0;
+    var mean = Mean();
     for (var k = -r; k <= r; k++) {
         let tap = vec2<i32>(gid.xy) + step * k;
         if any(tap < vec2<i32>(0)) || tap.x >= i32(frame.width) || tap.y >= i32(frame.height) {
@@ -59,8 +57,11 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let fk = f32(k);
         let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
         let w = gauss * bilateral_weight(z, gword_normal(word), zc, gword_normal(centre));
-        sum += w * (source[q] - own);
-        weights += w;
+        mean_add(&mean, source[q], w);
     }
-    blurred[p] = select(own, bounded(own + sum / weights), weights > 0.0);
+    if mean.weight > 0.0 {
+        blurred[p] = mean_value(mean);
+    } else {
+        blurred[p] = source[p];
+    }
 }

@@ -191,10 +191,6 @@ fn finite3(v: vec3<f32>) -> bool {
 // wgsl/temporal.wgsl keeps them.
 #include "shared/irradiance.wgsl"
 
-fn usable(v: Value) -> bool {
-    return usable_irradiance(v);
-}
-
 #include "shared/history.wgsl"
 
 // The last frame's layer-1 gather at the layer-1 point of `pixel` (sample s), spread over the

@@ -19,17 +19,8 @@
 
 #if VEC4
 const EMPTY: Value = vec4<f32>(0.0);
-
-fn usable(v: Value) -> bool {
-    return usable_irradiance(v);
-}
 #else
 const EMPTY: Value = 1.0;
-
-// A visibility in [0, 1].
-fn usable(v: Value) -> bool {
-    return v >= 0.0 && v <= 1.0;
-}
 #endif
 
 // Mirrors `TemporalUniform` in src/frame/uniforms.rs.
@@ -66,7 +57,7 @@ fn temporal_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let h = history_at(gid.xy, sample_at(p), params.history != 0u, params.tolerance, &valid);
     if valid {
         // mix(v, h, alpha), exactly v where the history equals it, kept in range
-        // (shared/value.wgsl).
+        // (shared/mean.wgsl).
         v = bounded(v + (h - v) * params.alpha);
     }
     history_out[p] = select(EMPTY, v, usable(v));

@@ -68,25 +68,18 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let at = (vec2<f32>(gid.xy) + 0.5) / f32(1u << LEVEL) - 0.5;
     let base = floor(at);
     let f = at - base;
-    // The weighted mean about the first valid texel's value (shared/value.wgsl).
-    var reference = Value(EMPTY);
-    var sum = Value(0.0);
-    var weights = 0.0;
+    var mean = Mean();
     for (var j = 0u; j < 4u; j++) {
         let corner = vec2<f32>(f32(j & 1u), f32(j >> 1u));
         let t = vec2<u32>(clamp(base + corner, vec2<f32>(0.0), last));
         let c = candidate(t, size, z, n);
         if c.valid {
             let b = select(1.0 - f, f, corner > vec2<f32>(0.5));
-            if !(weights > 0.0) {
-                reference = c.value;
-            }
-            sum += b.x * b.y * c.weight * (c.value - reference);
-            weights += b.x * b.y * c.weight;
+            mean_add(&mean, c.value, b.x * b.y * c.weight);
         }
     }
-    if weights > 0.0 {
-        full[p] = bounded(reference + sum / weights);
+    if mean.weight > 0.0 {
+        full[p] = mean_value(mean);
         return;
     }
     // No texel of the four stands for this surface (a thin strip, or an edge the rotated grid
@@ -98,16 +91,16 @@ fn upsample_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let t = vec2<u32>(clamp(base + vec2<f32>(f32(j & 3u), f32(j >> 2u)) - 1.0, vec2<f32>(0.0), last));
         let c = candidate(t, size, z, n);
         if c.valid {
-            if !(weights > 0.0) {
-                reference = c.value;
-            }
-            sum += c.weight * (c.value - reference);
-            weights += c.weight;
+            mean_add(&mean, c.value, c.weight);
             if c.gap < nearest_gap {
                 nearest_gap = c.gap;
                 nearest = c.value;
             }
         }
     }
-    full[p] = select(nearest, bounded(reference + sum / weights), weights > 0.0);
+    if mean.weight > 0.0 {
+        full[p] = mean_value(mean);
+    } else {
+        full[p] = nearest;
+    }
 }

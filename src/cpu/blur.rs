@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+use crate::cpu::mean::Mean;
 use crate::gbuffer::GSample;
 
 const DEPTH_TOLERANCE: f32 = 0.05;
@@ -36,10 +37,7 @@ pub fn blur(
             if center.depth.is_nan() || center.depth <= 0.0 || radius == 0 {
                 continue;
             }
-            // The mean about the pixel's own value, as the kernel takes it
-            // (`wgsl/shared/value.wgsl`, which also clamps it to [0, 1]).
-            let own = source[p];
-            let (mut sum, mut weights) = (0.0f32, 0.0f32);
+            let mut mean = Mean::new(0.0f32);
             for k in -r..=r {
                 let (tx, ty) = (x + step.0 * k, y + step.1 * k);
                 if tx < 0 || ty < 0 || tx >= width as i32 || ty >= height as i32 {
@@ -53,11 +51,10 @@ pub fn blur(
                 let fk = k as f32;
                 let gauss = (-fk * fk / (2.0 * sigma * sigma)).exp();
                 let w = gauss * bilateral_weight(s.depth, s.normal, center.depth, center.normal);
-                sum += w * (source[q] - own);
-                weights += w;
+                mean.add(source[q], w);
             }
-            if weights > 0.0 {
-                target[p] = own + sum / weights;
+            if let Some(v) = mean.value() {
+                target[p] = v;
             }
         }
     }

@@ -7,6 +7,7 @@ pub mod composite;
 pub mod direct;
 pub mod dof;
 pub mod frame;
+pub mod mean;
 pub mod motion_blur;
 pub mod offscreen;
 pub mod pyramid;

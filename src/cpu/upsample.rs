@@ -3,6 +3,8 @@
 
 use std::ops::{Add, Div, Mul, Sub};
 
+use crate::cpu::mean::Mean;
+
 use crate::cpu::blur::bilateral_weight;
 use crate::cpu::pyramid::{mip_origin, mip_size};
 use crate::gbuffer::GSample;
@@ -29,9 +31,8 @@ fn candidate<T: Copy>(
 
 /// Every pixel of a `width` x `height` image from `low`, the effect computed at `level` (texel t
 /// at the pixel `mip_origin(level, t)`), guided by the layer-0 `samples`; pixels without a
-/// surface, or whose 4x4 texels have none, take `empty`. The weighted means are taken about the
-/// first valid texel's value, as the kernel takes them (`wgsl/shared/value.wgsl`; the kernel
-/// also clamps them to the range of what it carries, which values here need not keep).
+/// surface, or whose 4x4 texels have none, take `empty`. The weighted means are `Mean`s, as the
+/// kernel's are.
 pub fn upsample<T>(
     width: u32,
     height: u32,
@@ -59,40 +60,32 @@ where
             let at = ((x as f32 + 0.5) / scale - 0.5, (y as f32 + 0.5) / scale - 0.5);
             let base = (at.0.floor(), at.1.floor());
             let f = (at.0 - base.0, at.1 - base.1);
-            let (mut reference, mut sum, mut weights) = (empty, empty * 0.0, 0.0f32);
+            let mut mean = Mean::new(empty * 0.0);
             for j in 0..4u32 {
                 let corner = ((j & 1) as f32, (j >> 1) as f32);
                 let t = texel(base.0 + corner.0, base.1 + corner.1);
                 if let Some((value, _, weight)) = candidate(image, t, size, s, samples, low) {
                     let bx = if corner.0 > 0.5 { f.0 } else { 1.0 - f.0 };
                     let by = if corner.1 > 0.5 { f.1 } else { 1.0 - f.1 };
-                    if weights <= 0.0 {
-                        reference = value;
-                    }
-                    sum = sum + (value - reference) * (bx * by * weight);
-                    weights += bx * by * weight;
+                    mean.add(value, bx * by * weight);
                 }
             }
-            if weights > 0.0 {
-                out.push(reference + sum / weights);
+            if let Some(v) = mean.value() {
+                out.push(v);
                 continue;
             }
             let (mut nearest, mut nearest_gap) = (empty, 3.0e38f32);
             for j in 0..16u32 {
                 let t = texel(base.0 + (j & 3) as f32 - 1.0, base.1 + (j >> 2) as f32 - 1.0);
                 if let Some((value, gap, weight)) = candidate(image, t, size, s, samples, low) {
-                    if weights <= 0.0 {
-                        reference = value;
-                    }
-                    sum = sum + (value - reference) * weight;
-                    weights += weight;
+                    mean.add(value, weight);
                     if gap < nearest_gap {
                         nearest_gap = gap;
                         nearest = value;
                     }
                 }
             }
-            out.push(if weights > 0.0 { reference + sum / weights } else { nearest });
+            out.push(mean.value().unwrap_or(nearest));
         }
     }
     out

@@ -5,15 +5,11 @@
 // history_at reads bindings the including kernel declares by name (WGSL cannot pass a storage
 // buffer to a function, so the names are the contract): `prev_vis0`, the previous frame's
 // layer-0 visibility words, and `history_in`, its filtered values, an `array<Value>` of the
-// kernel's `Value` type, which the kernel also gives `usable(Value) -> bool`: whether a stored
-// value may enter this frame (finite and within its range).
+// kernel's `Value` type, with its `bounded` and `usable` (shared/value.wgsl or
+// shared/irradiance.wgsl, included before this file).
 // Needs shared/frame.wgsl, shared/gbuffer.wgsl, shared/spiral.wgsl and shared/vis.wgsl.
 
-// Whether a stored irradiance and coverage (the radiosity's values) may enter a frame: the
-// irradiance finite, the share of the hemisphere it covers in [0, 1].
-fn usable_irradiance(v: vec4<f32>) -> bool {
-    return all(abs(v.rgb) <= vec3<f32>(3.0e38)) && v.a >= 0.0 && v.a <= 1.0;
-}
+#include "shared/mean.wgsl"
 
 // Where the point of a sample was in the previous frame.
 struct Previous {
@@ -84,10 +80,7 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
     var t = f - vec2<f32>(base);
     t = select(t, round(t), abs(t - round(t)) < vec2<f32>(1.0 / 256.0));
     let size = vec2<i32>(i32(frame.width), i32(frame.height));
-    // The mean about the first usable value (shared/value.wgsl).
-    var reference = Value();
-    var sum = Value();
-    var weight = 0.0;
+    var mean = Mean();
     for (var k = 0u; k < 4u; k++) {
         let o = vec2<u32>(k & 1u, k >> 1u);
         let at = base + vec2<i32>(o);
@@ -102,16 +95,12 @@ fn history_at(pixel: vec2<u32>, s: GSample, history: bool, tolerance: f32, valid
         }
         let h = history_in[q];
         if usable(h) {
-            if !(weight > 0.0) {
-                reference = h;
-            }
-            sum += w * (h - reference);
-            weight += w;
+            mean_add(&mean, h, w);
         }
     }
-    if !(weight > 0.0) {
+    if !(mean.weight > 0.0) {
         return Value();
     }
     *valid = true;
-    return bounded(reference + sum / weight);
+    return mean_value(mean);
 }
