@@ -243,6 +243,10 @@ struct TruthArgs {
     /// Render the GPU's estimate with the same settings and print its error next to its GPU time.
     #[arg(long)]
     compare: bool,
+    /// With --compare: write the GPU's estimate as linear EXR (the pixels no surface covers
+    /// black), to set beside the truth's --exr pixel by pixel.
+    #[arg(long, requires = "compare")]
+    estimate_exr: Option<PathBuf>,
 }
 
 /// The obscurance's settings (render, and truth's GPU estimate). Those not given keep the
@@ -812,6 +816,11 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
         let layer0 = renderer.read_gbuffer(&gpu.device, &gpu.queue, 0)?;
         let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
         let stats = deep_gbuffer::truth::metrics::compare(&estimate, &mask, &image);
+        if let Some(path) = &args.estimate_exr {
+            let covered: Vec<Vec3> =
+                estimate.iter().zip(&mask).map(|(v, m)| if *m { *v } else { Vec3::ZERO }).collect();
+            output::write_exr(path, w, h, &covered)?;
+        }
         let timings = renderer.timings(&gpu.device)?;
         // The image costs the whole frame.
         let timed: Vec<_> = timings

@@ -270,13 +270,16 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     let output = cli()
         .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "8", "--compare", "--exr"])
         .arg(dir.join("ao.exr"))
+        .arg("--estimate-exr")
+        .arg(dir.join("gpu.exr"))
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("mean standard error"), "{stdout}");
     assert!(stdout.contains("rmse") && stdout.contains(" ms on "), "{stdout}");
-    for file in ["ao.exr", "ao-stderr.exr"] {
+    // The truth, its noise and the GPU's estimate (--estimate-exr), each an AV per pixel.
+    let read = |file: &str| {
         let image = exr::prelude::read_first_rgba_layer_from_file(
             dir.join(file),
             |r, _| vec![0.0f32; r.area()],
@@ -286,7 +289,20 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         let values = image.layer_data.channel_data.pixels;
         assert_eq!(values.len(), 24 * 18);
         assert!(values.iter().all(|v| (0.0..=1.0).contains(v)), "{file}");
-    }
+        values
+    };
+    let (truth, _, estimate) = (read("ao.exr"), read("ao-stderr.exr"), read("gpu.exr"));
+    // The GPU's own values, not the truth's, and obscured in places.
+    assert_ne!(truth, estimate);
+    assert!(estimate.iter().any(|v| *v > 0.0 && *v < 0.9), "{estimate:?}");
+    // --estimate-exr needs --compare.
+    let output = cli()
+        .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--estimate-exr"])
+        .arg(dir.join("alone.exr"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--compare"));
     // The full image and the reflections (the sphere field has mirrors), with the GPU's error
     // and, for the image, its SSIM.
     for (effect, scene, expect) in

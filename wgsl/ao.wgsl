@@ -28,7 +28,7 @@
 // directions meet first; the solid only decides which directions they are: taking the solid's
 // nearest point instead darkens with the thickness, measured). Points are lowered by beta
 // along the normal, so a plane's own taps fall below its tangent plane and an open plane stays
-// exactly 1. With g = f in the slices' sum,
+// exactly 1; their falloff keeps the true distance. With g = f in the slices' sum,
 //     AV = clamp(1 - intensity / S sum_slices |n_p| W_total / SECTORS sum_sectors f, 0, 1),
 // which converges to the integral as slices and steps grow, up to what the two layers do not
 // show.

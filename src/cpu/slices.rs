@@ -158,7 +158,7 @@ impl Slice {
     }
 
     /// As `solid_sectors`: the sectors the solid of a point hides, and the squared distance
-    /// from `c` to the (lowered) point.
+    /// from `c` to the point (not lowered).
     #[allow(clippy::too_many_arguments, reason = "the WGSL function's arguments, in its order")]
     pub fn solid_sectors(
         &self,
@@ -173,11 +173,12 @@ impl Slice {
         radius: f32,
     ) -> (u32, f32) {
         let down = n * lower;
-        let y = view_position(f, at, z) - down;
+        let point = view_position(f, at, z);
+        let y = point - down;
         let endless = back.is_nan() || back <= z;
         let far = view_position(f, at, if endless { 2.0 * z } else { back }) - down;
         let nearest = segment_distance(c, y, far, endless);
-        let front2 = (y - c).length_squared();
+        let front2 = (point - c).length_squared();
         let height = (y - c).dot(n);
         if nearest.is_nan() || nearest >= radius || height.is_nan() || height <= 0.0 {
             return (0, front2);
@@ -190,5 +191,36 @@ impl Slice {
             (true, false) => 0.0,
         };
         (self.bits(w0, w1), front2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::CameraMatrices;
+    use crate::scene::Camera;
+
+    /// Lowering a point (the obscurance's bias) decides which directions its solid hides, not
+    /// how far away the surface is: the distance its falloff takes is the point's own, so that
+    /// a larger bias never brings an occluder nearer.
+    #[test]
+    fn a_lowered_point_keeps_its_own_distance() {
+        let camera = Camera::perspective(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 60.0, 0.1);
+        let (w, h) = (64, 48);
+        let m = CameraMatrices::new(&camera, w, h);
+        let f = FrameUniform::new(&camera, m, m, w, h, 0.0, (0, 0, 0));
+        // A wall facing the camera at depth 3 and, four pixels to the right, a point 0.4 in
+        // front of it.
+        let c = view_position(&f, Vec2::new(32.5, 24.5), 3.0);
+        let n = Vec3::Z;
+        let sl = Slice::at(&f, 0, 1, (0.0, 0.5, 0.5), c, n);
+        let at = Vec2::new(36.5, 24.5);
+        let point = view_position(&f, at, 2.6);
+        let own = (point - c).length_squared();
+        for lower in [0.0, 0.05, 0.2] {
+            let (bits, front2) = sl.solid_sectors(&f, c, n, at, 1.0, 2.6, 2.9, lower, 1.0);
+            assert_ne!(bits, 0, "lowered by {lower} the point still stands above the wall");
+            assert_eq!(front2, own, "lowered by {lower}");
+        }
     }
 }

@@ -166,14 +166,17 @@ fn solid_backs(z0: f32, z1: f32, thickness: f32) -> vec2<f32> {
 // lowered by `lower` along the normal n, lies above c's tangent plane (its solid runs away from
 // the camera, further below). `back`: the depth its solid ends at, 0 for without end (towards
 // theta = +-pi on its side: the far end of its view ray, seen from c, lies off c's own ray on
-// the tap's side). `front2`: the squared distance from c to the (lowered) point.
+// the tap's side). `front2`: the squared distance from c to the point itself, not lowered (the
+// lowering decides which directions the solid hides, not how far the surface is: with the
+// lowered point's distance a point above the tangent plane came nearer by up to `lower`).
 fn solid_sectors(sl: Slice, c: vec3<f32>, n: vec3<f32>, at: vec2<f32>, side: f32, z: f32, back: f32, lower: f32, radius: f32, front2: ptr<function, f32>) -> u32 {
     let down = n * lower;
-    let y = view_position(frame, at, z) - down;
+    let point = view_position(frame, at, z);
+    let y = point - down;
     let endless = !(back > z);
     let far = view_position(frame, at, select(back, 2.0 * z, endless)) - down;
     let nearest = segment_distance(c, y, far, endless);
-    *front2 = dot(y - c, y - c);
+    *front2 = dot(point - c, point - c);
     if !(nearest < radius) || !(dot(y - c, n) > 0.0) {
         return 0u;
     }
