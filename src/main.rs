@@ -270,6 +270,10 @@ struct AoArgs {
     /// (bitmask) [default: 0.75].
     #[arg(long)]
     ao_thickness: Option<f32>,
+    /// Weight of the steps' extrapolation of the horizon and bitmask estimators, 0 to 2 (0:
+    /// none) [default: 0.6].
+    #[arg(long)]
+    ao_extrapolation: Option<f32>,
     /// Obscurance from layer 0 only (to compare with the two-layer estimator).
     #[arg(long)]
     ao_one_layer: bool,
@@ -295,6 +299,7 @@ impl AoArgs {
         ao.samples = self.ao_samples.unwrap_or(ao.samples);
         ao.slices = self.ao_slices.unwrap_or(ao.slices);
         ao.thickness = self.ao_thickness.unwrap_or(ao.thickness);
+        ao.extrapolation = self.ao_extrapolation.unwrap_or(ao.extrapolation);
         ao.downsample = self.ao_downsample.unwrap_or(ao.downsample);
         ao.alpha = self.ao_alpha.unwrap_or(ao.alpha);
         ao.history_slices = self.ao_history_slices.unwrap_or(ao.history_slices);

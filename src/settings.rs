@@ -239,6 +239,13 @@ pub struct AoSettings {
     pub radius: f32,
     /// Taps per pixel.
     pub samples: u32,
+    /// Weight k of the steps' extrapolation (`horizon`, `bitmask`): each slice's obscurance is
+    /// `O + k (O - O_half)`, `O_half` what every other step alone finds (Richardson's
+    /// extrapolation in the steps a side). Steps spaced apart miss the tops of what rises
+    /// between them, so the estimate lies above the truth by an amount that falls as the
+    /// steps grow, about as `steps^-1.4` on the scenes measured: `k = 1 / (2^1.4 - 1) = 0.6`
+    /// removes it to first order at no extra pyramid read. 0: the plain estimate. 0 to 2.
+    pub extrapolation: f32,
     /// Bias β, in scene units: each tap's point is lowered by β along the normal before it is
     /// tested against the tangent plane (suppresses self-occlusion on tessellated curves); its
     /// falloff keeps its true distance. 0.001 at the Cornell box's scale (a five-hundredth of the
@@ -291,6 +298,7 @@ impl Default for AoSettings {
             radius: 0.5,
             samples: 32,
             bias: 0.001,
+            extrapolation: 0.6,
             intensity: 1.0,
             two_layers: true,
             blur_radius: 4,
@@ -366,6 +374,12 @@ impl AoSettings {
             return Err(Error::setting(
                 "ao.bias",
                 format!("{} (must be finite and >= 0)", self.bias),
+            ));
+        }
+        if !(self.extrapolation.is_finite() && (0.0..=2.0).contains(&self.extrapolation)) {
+            return Err(Error::setting(
+                "ao.extrapolation",
+                format!("{} (must be 0 to 2)", self.extrapolation),
             ));
         }
         if !(self.intensity.is_finite() && self.intensity >= 0.0) {

@@ -186,6 +186,8 @@ fn invalid_obscurance_settings_are_refused() {
         (AoSettings { intensity: f32::NAN, ..Default::default() }, "ao.intensity"),
         (AoSettings { downsample: 3, ..Default::default() }, "ao.downsample"),
         (AoSettings { downsample: 0, ..Default::default() }, "ao.downsample"),
+        (AoSettings { extrapolation: -0.5, ..Default::default() }, "ao.extrapolation"),
+        (AoSettings { extrapolation: f32::INFINITY, ..Default::default() }, "ao.extrapolation"),
         (AoSettings { alpha: 1.0, ..Default::default() }, "ao.alpha"),
         (AoSettings { alpha: f32::NAN, ..Default::default() }, "ao.alpha"),
         (AoSettings { history_slices: 17, ..Default::default() }, "ao.history_slices"),

@@ -197,6 +197,52 @@ fn gpu_obscurance_error_falls_as_its_samples_rise() {
     assert!(errors.iter().all(|e| e.rmse > e.truth_stderr));
 }
 
+/// Steps spaced apart miss the tops of what rises between them, so the slice estimators' AV
+/// lies above the truth's; the steps' extrapolation (`AoSettings::extrapolation`, from what
+/// every other step finds) removes most of that bias, and the error with it, on the sphere
+/// field, whose spheres rise from the ground between the steps (at 64x48: bias +0.0215 ->
+/// +0.0073, RMSE 0.0527 -> 0.0448 when written).
+#[test]
+fn the_steps_extrapolation_removes_most_of_the_obscurances_bias() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:grid-20000").unwrap();
+    let camera = scene.camera_or_default();
+    let (w, h) = (64, 48);
+    // The lengths as the command line scales them to the scene.
+    let base = Settings {
+        timings: false,
+        ..Settings::with_size(w, h).scaled(Settings::scale_for(scene.extent()))
+    };
+    let tracer = Tracer::new(&scene).unwrap();
+    let truth = tracer
+        .ambient_obscurance(
+            &scene,
+            &Shot { camera: &camera, size: (w, h), spp: 256, seed: 1 },
+            &base.ao,
+            &|| (),
+        )
+        .unwrap();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let error = |extrapolation| {
+        let mut settings = base.clone();
+        settings.ao.extrapolation = extrapolation;
+        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
+        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+        let estimate: Vec<Vec3> =
+            av.iter().take((w * h) as usize).map(|v| Vec3::splat(*v)).collect();
+        let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
+        let e = metrics::compare(&estimate, &mask, &truth);
+        (e.rmse, e.estimate_mean - e.truth_mean)
+    };
+    let (plain, extrapolated) = (error(0.0), error(AoSettings::default().extrapolation));
+    eprintln!("(rmse, bias) plain {plain:?}, extrapolated {extrapolated:?}");
+    assert!(plain.1 > 0.01, "the plain estimate lies above the truth: {plain:?}");
+    assert!(extrapolated.1.abs() < 0.5 * plain.1, "{plain:?} -> {extrapolated:?}");
+    assert!(extrapolated.0 < plain.0, "{plain:?} -> {extrapolated:?}");
+}
+
 #[test]
 fn invalid_truth_requests_are_refused() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();

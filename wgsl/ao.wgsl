@@ -31,7 +31,10 @@
 // exactly 1; their falloff keeps the true distance. With g = f in the slices' sum,
 //     AV = clamp(1 - intensity / S sum_slices |n_p| W_total / SECTORS sum_sectors f, 0, 1),
 // which converges to the integral as slices and steps grow, up to what the two layers do not
-// show.
+// show. Steps spaced apart miss the tops of what rises between them, so each slice's sum falls
+// short by an amount that shrinks as the steps grow; each slice takes its sum S and the sum
+// S_half of every other step alone (the same points, no further reads) and counts
+// S + extrapolation (S - S_half) (Richardson's extrapolation in the steps a side).
 // defines: PACKED TWO_LAYERS SLICES
 
 #include "shared/frame.wgsl"
@@ -57,7 +60,8 @@ struct Ao {
     // Frames since the temporal filter's history began (0 without it): turns the slices, so
     // that wgsl/temporal.wgsl averages other directions every frame (SLICES).
     turn: u32,
-    _pad0: u32,
+    // Weight of the difference from the estimate of every other step (SLICES).
+    extrapolation: f32,
     _pad1: u32,
     _pad2: u32,
     offsets: array<vec4<u32>, 2>,
@@ -186,6 +190,9 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
         }
         var occupied = 0u;
         var hidden = 0.0;
+        // The same over every other step (j even), for the extrapolation.
+        var occupied_half = 0u;
+        var hidden_half = 0.0;
         // The two sides hold opposite halves of the arc; each spreads its steps over the radius
         // or, where the slice's line leaves the screen first, over the part on screen.
         for (var side = 0u; side < 2u; side++) {
@@ -195,6 +202,8 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
             // The falloff of the side's last layer-0 point (-1: none yet), and the point.
             var last = -1.0;
             var last_y = vec3<f32>(0.0);
+            var last_half = -1.0;
+            var last_half_y = vec3<f32>(0.0);
             for (var j = 0u; j < steps; j++) {
                 let h = step_distance(spacing, j, steps, noise.y);
                 // Finer levels for the near steps, as `sao` reads them, never coarser than the
@@ -221,17 +230,30 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
                 let y = view_position(frame, at, z0);
                 let joined = last >= 0.0 && length(y - last_y) < length(y - c);
                 hidden += step_falloff(falloff, select(-1.0, last, joined)) * f32(countOneBits(bits & ~occupied));
+                let even = (j & 1u) == 0u;
+                if even {
+                    let joined_half = last_half >= 0.0 && length(y - last_half_y) < length(y - c);
+                    hidden_half += step_falloff(falloff, select(-1.0, last_half, joined_half)) * f32(countOneBits(bits & ~occupied_half));
+                    occupied_half |= bits;
+                    last_half = falloff;
+                    last_half_y = y;
+                }
                 last = falloff;
                 last_y = y;
                 occupied |= bits;
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, ao.bias, ao.radius, &front2);
-                    hidden += max(1.0 - front2 / r2, 0.0) * f32(countOneBits(bits & ~occupied));
+                    let f1 = max(1.0 - front2 / r2, 0.0);
+                    hidden += f1 * f32(countOneBits(bits & ~occupied));
                     occupied |= bits;
+                    if even {
+                        hidden_half += f1 * f32(countOneBits(bits & ~occupied_half));
+                        occupied_half |= bits;
+                    }
                 }
             }
         }
-        total += sl.weight * hidden / f32(SECTORS);
+        total += sl.weight * (hidden + ao.extrapolation * (hidden - hidden_half)) / f32(SECTORS);
     }
     return clamp(1.0 - ao.intensity * total / f32(slices), 0.0, 1.0);
 }

@@ -152,6 +152,9 @@ impl Kernel<'_> {
             }
             let mut occupied = 0u32;
             let mut hidden = 0.0;
+            // The same over every other step (j even), for the extrapolation.
+            let mut occupied_half = 0u32;
+            let mut hidden_half = 0.0;
             // The two sides hold opposite halves of the arc; each spreads its steps over the
             // radius or the part of it on screen.
             for side in [1.0, -1.0] {
@@ -159,6 +162,7 @@ impl Kernel<'_> {
                 let level = mip_coarsest(spacing, self.layout);
                 // The falloff of the side's last layer-0 point, and the point.
                 let mut last: Option<(f32, Vec3)> = None;
+                let mut last_half: Option<(f32, Vec3)> = None;
                 for j in 0..steps {
                     let h = step_distance(spacing, j, steps, noise.1);
                     // Finer levels for the near steps, as `sao` reads them, never coarser than
@@ -176,10 +180,19 @@ impl Kernel<'_> {
                         sl.solid_sectors(f, c, n, at, side, z0, back0, s.bias, s.radius);
                     let own = falloff(front2);
                     let point = view_position(f, at, z0);
-                    let joined = last
-                        .filter(|(_, p)| (point - *p).length() < (point - c).length())
-                        .map(|(f, _)| f);
-                    hidden += step_falloff(own, joined) * (bits & !occupied).count_ones() as f32;
+                    let joined = |last: Option<(f32, Vec3)>| {
+                        last.filter(|(_, p)| (point - *p).length() < (point - c).length())
+                            .map(|(f, _)| f)
+                    };
+                    let even = j % 2 == 0;
+                    hidden +=
+                        step_falloff(own, joined(last)) * (bits & !occupied).count_ones() as f32;
+                    if even {
+                        hidden_half += step_falloff(own, joined(last_half))
+                            * (bits & !occupied_half).count_ones() as f32;
+                        occupied_half |= bits;
+                        last_half = Some((own, point));
+                    }
                     last = Some((own, point));
                     occupied |= bits;
                     if z1 > z0 {
@@ -187,10 +200,16 @@ impl Kernel<'_> {
                             sl.solid_sectors(f, c, n, at, side, z1, back1, s.bias, s.radius);
                         hidden += falloff(front2) * (bits & !occupied).count_ones() as f32;
                         occupied |= bits;
+                        if even {
+                            hidden_half +=
+                                falloff(front2) * (bits & !occupied_half).count_ones() as f32;
+                            occupied_half |= bits;
+                        }
                     }
                 }
             }
-            total += sl.weight * hidden / SECTORS as f32;
+            let extrapolated = hidden + s.extrapolation * (hidden - hidden_half);
+            total += sl.weight * extrapolated / SECTORS as f32;
         }
         (1.0 - s.intensity * total / slices as f32).clamp(0.0, 1.0)
     }

@@ -33,7 +33,9 @@ pub struct AoUniform {
     pub thickness: f32,
     /// Frames since the temporal filter's history began (0 without it): turns the slices.
     pub turn: u32,
-    pub _pad: [u32; 3],
+    /// [`AoSettings::extrapolation`].
+    pub extrapolation: f32,
+    pub _pad: [u32; 2],
     /// Level offsets in the packed pyramid (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
@@ -43,7 +45,19 @@ mirrored!(
     AoUniform,
     "ao.wgsl",
     "Ao",
-    [radius, bias, intensity, samples, levels, mip_offset, slices, thickness, turn, offsets]
+    [
+        radius,
+        bias,
+        intensity,
+        samples,
+        levels,
+        mip_offset,
+        slices,
+        thickness,
+        turn,
+        extrapolation,
+        offsets
+    ]
 );
 
 impl AoUniform {
@@ -62,7 +76,8 @@ impl AoUniform {
             slices,
             thickness: settings.solid_depth(),
             turn,
-            _pad: [0; 3],
+            extrapolation: settings.extrapolation,
+            _pad: [0; 2],
             offsets: level_offsets(layout),
         }
     }
