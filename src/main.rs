@@ -108,6 +108,9 @@ struct SweepArgs {
     /// Obscurance temporal filter weights to sweep (0: no filter).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_alpha))]
     ao_alpha: Vec<f32>,
+    /// Weights of the obscurance steps' extrapolation.
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_extrapolation))]
+    ao_extrapolation: Vec<f32>,
     /// Radiosity slices a frame with the temporal history gathers, to sweep (0: all).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_history_slices))]
     radiosity_history_slices: Vec<u32>,
@@ -914,6 +917,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_slices: args.ao_slices,
         ao_samples: args.ao_samples,
         ao_alpha: args.ao_alpha,
+        ao_extrapolation: args.ao_extrapolation,
         radiosity_samples: args.radiosity_samples,
         radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,
