@@ -4,7 +4,7 @@
 mod common;
 
 use common::{corner, corner_obscurance, corner_surface, gpu, soup};
-use deep_gbuffer::truth::{Shot, Tracer, metrics};
+use deep_gbuffer::truth::{Shot, Tracer, TruthImage, metrics};
 use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 
@@ -158,36 +158,43 @@ fn the_same_seed_gives_the_same_truth_and_another_seed_another() {
     assert_ne!(a.value, c.value);
 }
 
+/// The truth's obscurance of `scene` from its own camera at `size`, 256 rays per pixel.
+fn obscurance_truth(scene: &Scene, size: (u32, u32), ao: &AoSettings) -> TruthImage {
+    let camera = scene.camera_or_default();
+    let shot = Shot { camera: &camera, size, spp: 256, seed: 1 };
+    Tracer::new(scene).unwrap().ambient_obscurance(scene, &shot, ao, &|| ()).unwrap()
+}
+
+/// The GPU's obscurance of `scene` from its own camera with `settings`, against `truth`.
+fn obscurance_error(scene: &Scene, settings: Settings, truth: &TruthImage) -> metrics::ErrorStats {
+    let g = gpu();
+    let camera = scene.camera_or_default();
+    let pixels = (settings.width * settings.height) as usize;
+    let buffers = SceneBuffers::upload(&g.device, scene).unwrap();
+    let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
+    let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+    let estimate: Vec<Vec3> = av.iter().take(pixels).map(|v| Vec3::splat(*v)).collect();
+    let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
+    metrics::compare(&estimate, &mask, truth)
+}
+
 /// The error of the GPU's obscurance against the truth falls as its tap count rises (the blur is
 /// off so the taps alone decide the noise), and never below the truth's own noise floor.
 #[test]
 fn gpu_obscurance_error_falls_as_its_samples_rise() {
-    let g = gpu();
     let scene = Scene::from_spec("builtin:cornell").unwrap();
-    let camera = scene.camera_or_default();
     let (w, h) = (64, 48);
-    let tracer = Tracer::new(&scene).unwrap();
     let base = AoSettings { blur_radius: 0, ..Default::default() };
-    let truth = tracer
-        .ambient_obscurance(
-            &scene,
-            &Shot { camera: &camera, size: (w, h), spp: 256, seed: 1 },
-            &base,
-            &|| (),
-        )
-        .unwrap();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let truth = obscurance_truth(&scene, (w, h), &base);
     let error = |samples| {
         let ao = AoSettings { samples, ..base.clone() };
-        let settings = Settings { ao, timings: false, ..Settings::with_size(w, h) };
-        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
-        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
-        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-        let estimate: Vec<Vec3> =
-            av.iter().take((w * h) as usize).map(|v| Vec3::splat(*v)).collect();
-        let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
-        metrics::compare(&estimate, &mask, &truth)
+        obscurance_error(
+            &scene,
+            Settings { ao, timings: false, ..Settings::with_size(w, h) },
+            &truth,
+        )
     };
     let errors: Vec<_> = [2, 8, 32].map(error).into();
     eprintln!("{errors:#?}");
@@ -204,36 +211,18 @@ fn gpu_obscurance_error_falls_as_its_samples_rise() {
 /// +0.0073, RMSE 0.0527 -> 0.0448 when written).
 #[test]
 fn the_steps_extrapolation_removes_most_of_the_obscurances_bias() {
-    let g = gpu();
     let scene = Scene::from_spec("builtin:grid-20000").unwrap();
-    let camera = scene.camera_or_default();
     let (w, h) = (64, 48);
     // The lengths as the command line scales them to the scene.
     let base = Settings {
         timings: false,
         ..Settings::with_size(w, h).scaled(Settings::scale_for(scene.extent()))
     };
-    let tracer = Tracer::new(&scene).unwrap();
-    let truth = tracer
-        .ambient_obscurance(
-            &scene,
-            &Shot { camera: &camera, size: (w, h), spp: 256, seed: 1 },
-            &base.ao,
-            &|| (),
-        )
-        .unwrap();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let truth = obscurance_truth(&scene, (w, h), &base.ao);
     let error = |extrapolation| {
         let mut settings = base.clone();
         settings.ao.extrapolation = extrapolation;
-        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
-        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let av = renderer.read_f32(&g.device, &g.queue, renderer.ao_buffer().unwrap()).unwrap();
-        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-        let estimate: Vec<Vec3> =
-            av.iter().take((w * h) as usize).map(|v| Vec3::splat(*v)).collect();
-        let mask: Vec<bool> = layer0.samples.iter().map(|s| s.depth > 0.0).collect();
-        let e = metrics::compare(&estimate, &mask, &truth);
+        let e = obscurance_error(&scene, settings, &truth);
         (e.rmse, e.estimate_mean - e.truth_mean)
     };
     let (plain, extrapolated) = (error(0.0), error(AoSettings::default().extrapolation));
