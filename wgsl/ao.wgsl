@@ -164,6 +164,36 @@ fn step_falloff(falloff: f32, last: f32) -> f32 {
     return select(falloff, 0.5 * (falloff + last), last >= 0.0);
 }
 
+// The sectors a slice's steps have hidden (all of them, or every other one for the
+// extrapolation) and their falloff-weighted count; `last` and `last_y`: the falloff of the
+// side's last layer-0 point (-1: none yet) and the point.
+struct Hidden {
+    occupied: u32,
+    sum: f32,
+    last: f32,
+    last_y: vec3<f32>,
+}
+
+fn hidden_new() -> Hidden {
+    return Hidden(0u, 0.0, -1.0, vec3<f32>(0.0));
+}
+
+// Counts the sectors `bits` of a layer-0 point y (its falloff `falloff`) that nothing hid
+// before, at step_falloff, joined to the side's last point where y lies nearer it than c does.
+fn hide_front(h: ptr<function, Hidden>, bits: u32, falloff: f32, y: vec3<f32>, c: vec3<f32>) {
+    let joined = (*h).last >= 0.0 && length(y - (*h).last_y) < length(y - c);
+    (*h).sum += step_falloff(falloff, select(-1.0, (*h).last, joined)) * f32(countOneBits(bits & ~(*h).occupied));
+    (*h).occupied |= bits;
+    (*h).last = falloff;
+    (*h).last_y = y;
+}
+
+// Counts the sectors `bits` of a layer-1 point that nothing hid before, at its own falloff.
+fn hide_behind(h: ptr<function, Hidden>, bits: u32, falloff: f32) {
+    (*h).sum += falloff * f32(countOneBits(bits & ~(*h).occupied));
+    (*h).occupied |= bits;
+}
+
 // How far (pixels) step j of `steps` lies along a side whose steps would lie `spacing` apart if
 // spread evenly: at t^1.5 of the side's reach, t = (j + jitter) / steps, so that they crowd
 // towards the point, where the falloff and the cosine weigh most and a groove narrower than
@@ -188,22 +218,17 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
         if !(sl.weight > 0.0) {
             continue;
         }
-        var occupied = 0u;
-        var hidden = 0.0;
-        // The same over every other step (j even), for the extrapolation.
-        var occupied_half = 0u;
-        var hidden_half = 0.0;
+        // Every step's sectors, and every other step's (j even) for the extrapolation.
+        var every = hidden_new();
+        var half = hidden_new();
         // The two sides hold opposite halves of the arc; each spreads its steps over the radius
         // or, where the slice's line leaves the screen first, over the part on screen.
         for (var side = 0u; side < 2u; side++) {
             let along = select(1.0, -1.0, side == 1u);
             let spacing = slice_spacing(pixel, sl, along, r_px, steps);
             let level = mip_coarsest(spacing, ao.levels);
-            // The falloff of the side's last layer-0 point (-1: none yet), and the point.
-            var last = -1.0;
-            var last_y = vec3<f32>(0.0);
-            var last_half = -1.0;
-            var last_half_y = vec3<f32>(0.0);
+            every.last = -1.0;
+            half.last = -1.0;
             for (var j = 0u; j < steps; j++) {
                 let h = step_distance(spacing, j, steps, noise.y);
                 // Finer levels for the near steps, as `sao` reads them, never coarser than the
@@ -224,36 +249,26 @@ fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3
                 z1 = pyramid1[q];
 #endif
                 let backs = solid_backs(z0, z1, ao.thickness);
+                let even = (j & 1u) == 0u;
                 var front2 = 0.0;
                 var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, ao.bias, ao.radius, &front2);
-                let falloff = max(1.0 - front2 / r2, 0.0);
+                var falloff = max(1.0 - front2 / r2, 0.0);
                 let y = view_position(frame, at, z0);
-                let joined = last >= 0.0 && length(y - last_y) < length(y - c);
-                hidden += step_falloff(falloff, select(-1.0, last, joined)) * f32(countOneBits(bits & ~occupied));
-                let even = (j & 1u) == 0u;
+                hide_front(&every, bits, falloff, y, c);
                 if even {
-                    let joined_half = last_half >= 0.0 && length(y - last_half_y) < length(y - c);
-                    hidden_half += step_falloff(falloff, select(-1.0, last_half, joined_half)) * f32(countOneBits(bits & ~occupied_half));
-                    occupied_half |= bits;
-                    last_half = falloff;
-                    last_half_y = y;
+                    hide_front(&half, bits, falloff, y, c);
                 }
-                last = falloff;
-                last_y = y;
-                occupied |= bits;
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, ao.bias, ao.radius, &front2);
-                    let f1 = max(1.0 - front2 / r2, 0.0);
-                    hidden += f1 * f32(countOneBits(bits & ~occupied));
-                    occupied |= bits;
+                    falloff = max(1.0 - front2 / r2, 0.0);
+                    hide_behind(&every, bits, falloff);
                     if even {
-                        hidden_half += f1 * f32(countOneBits(bits & ~occupied_half));
-                        occupied_half |= bits;
+                        hide_behind(&half, bits, falloff);
                     }
                 }
             }
         }
-        total += sl.weight * (hidden + ao.extrapolation * (hidden - hidden_half)) / f32(SECTORS);
+        total += sl.weight * (every.sum + ao.extrapolation * (every.sum - half.sum)) / f32(SECTORS);
     }
     return clamp(1.0 - ao.intensity * total / f32(slices), 0.0, 1.0);
 }

@@ -74,6 +74,35 @@ fn step_falloff(own: f32, last: Option<f32>) -> f32 {
     last.map_or(own, |last| 0.5 * (own + last))
 }
 
+/// As `Hidden`: the sectors a slice's steps have hidden (all of them, or every other one for
+/// the extrapolation), their falloff-weighted count, and the side's last layer-0 point with its
+/// falloff.
+#[derive(Default)]
+struct Hidden {
+    occupied: u32,
+    sum: f32,
+    last: Option<(f32, Vec3)>,
+}
+
+impl Hidden {
+    /// As `hide_front`: the sectors `bits` of layer-0 point `y` that nothing hid before, at
+    /// `step_falloff`, joined to the side's last point where `y` lies nearer it than `c` does.
+    fn front(&mut self, bits: u32, falloff: f32, y: Vec3, c: Vec3) {
+        let joined =
+            self.last.filter(|(_, p)| (y - *p).length() < (y - c).length()).map(|(f, _)| f);
+        self.sum += step_falloff(falloff, joined) * (bits & !self.occupied).count_ones() as f32;
+        self.occupied |= bits;
+        self.last = Some((falloff, y));
+    }
+
+    /// As `hide_behind`: the sectors `bits` of a layer-1 point that nothing hid before, at its
+    /// own falloff.
+    fn behind(&mut self, bits: u32, falloff: f32) {
+        self.sum += falloff * (bits & !self.occupied).count_ones() as f32;
+        self.occupied |= bits;
+    }
+}
+
 /// What `wgsl/ao.wgsl` reads: the frame, the settings and the depth pyramids.
 struct Kernel<'a> {
     f: &'a FrameUniform,
@@ -150,19 +179,15 @@ impl Kernel<'_> {
             if sl.weight.is_nan() || sl.weight <= 0.0 {
                 continue;
             }
-            let mut occupied = 0u32;
-            let mut hidden = 0.0;
-            // The same over every other step (j even), for the extrapolation.
-            let mut occupied_half = 0u32;
-            let mut hidden_half = 0.0;
+            // Every step's sectors, and every other step's (j even) for the extrapolation.
+            let (mut every, mut half) = (Hidden::default(), Hidden::default());
             // The two sides hold opposite halves of the arc; each spreads its steps over the
             // radius or the part of it on screen.
             for side in [1.0, -1.0] {
                 let spacing = sl.spacing(f, (x, y), side, r_px, steps);
                 let level = mip_coarsest(spacing, self.layout);
-                // The falloff of the side's last layer-0 point, and the point.
-                let mut last: Option<(f32, Vec3)> = None;
-                let mut last_half: Option<(f32, Vec3)> = None;
+                every.last = None;
+                half.last = None;
                 for j in 0..steps {
                     let h = step_distance(spacing, j, steps, noise.1);
                     // Finer levels for the near steps, as `sao` reads them, never coarser than
@@ -176,39 +201,25 @@ impl Kernel<'_> {
                     }
                     let z1 = self.pyramid1.map_or(0.0, |p1| p1[q]);
                     let (back0, back1) = solid_backs(z0, z1, thickness);
+                    let even = j % 2 == 0;
                     let (bits, front2) =
                         sl.solid_sectors(f, c, n, at, side, z0, back0, s.bias, s.radius);
-                    let own = falloff(front2);
                     let point = view_position(f, at, z0);
-                    let joined = |last: Option<(f32, Vec3)>| {
-                        last.filter(|(_, p)| (point - *p).length() < (point - c).length())
-                            .map(|(f, _)| f)
-                    };
-                    let even = j % 2 == 0;
-                    hidden +=
-                        step_falloff(own, joined(last)) * (bits & !occupied).count_ones() as f32;
+                    every.front(bits, falloff(front2), point, c);
                     if even {
-                        hidden_half += step_falloff(own, joined(last_half))
-                            * (bits & !occupied_half).count_ones() as f32;
-                        occupied_half |= bits;
-                        last_half = Some((own, point));
+                        half.front(bits, falloff(front2), point, c);
                     }
-                    last = Some((own, point));
-                    occupied |= bits;
                     if z1 > z0 {
                         let (bits, front2) =
                             sl.solid_sectors(f, c, n, at, side, z1, back1, s.bias, s.radius);
-                        hidden += falloff(front2) * (bits & !occupied).count_ones() as f32;
-                        occupied |= bits;
+                        every.behind(bits, falloff(front2));
                         if even {
-                            hidden_half +=
-                                falloff(front2) * (bits & !occupied_half).count_ones() as f32;
-                            occupied_half |= bits;
+                            half.behind(bits, falloff(front2));
                         }
                     }
                 }
             }
-            let extrapolated = hidden + s.extrapolation * (hidden - hidden_half);
+            let extrapolated = every.sum + s.extrapolation * (every.sum - half.sum);
             total += sl.weight * extrapolated / SECTORS as f32;
         }
         (1.0 - s.intensity * total / slices as f32).clamp(0.0, 1.0)

@@ -3,9 +3,8 @@
 
 use std::ops::{Add, Div, Mul, Sub};
 
-use crate::cpu::mean::Mean;
-
 use crate::cpu::blur::bilateral_weight;
+use crate::cpu::mean::Mean;
 use crate::cpu::pyramid::{mip_origin, mip_size};
 use crate::gbuffer::GSample;
 

@@ -5,11 +5,9 @@
 // history_at reads bindings the including kernel declares by name (WGSL cannot pass a storage
 // buffer to a function, so the names are the contract): `prev_vis0`, the previous frame's
 // layer-0 visibility words, and `history_in`, its filtered values, an `array<Value>` of the
-// kernel's `Value` type, with its `bounded` and `usable` (shared/value.wgsl or
+// kernel's `Value` type, with its `usable` and `Mean` (shared/value.wgsl or
 // shared/irradiance.wgsl, included before this file).
 // Needs shared/frame.wgsl, shared/gbuffer.wgsl, shared/spiral.wgsl and shared/vis.wgsl.
-
-#include "shared/mean.wgsl"
 
 // Where the point of a sample was in the previous frame.
 struct Previous {
