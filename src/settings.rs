@@ -128,6 +128,17 @@ pub enum AoEstimator {
     Bitmask,
 }
 
+impl AoEstimator {
+    /// The estimator's name, as `--ao-estimator` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            AoEstimator::Sao => "sao",
+            AoEstimator::Horizon => "horizon",
+            AoEstimator::Bitmask => "bitmask",
+        }
+    }
+}
+
 /// Named accuracy levels, chosen from the Pareto fronts that `deep-gbuffer sweep` measured on the
 /// shipped scenes (README, *Accuracy and cost*). Each sets the obscurance's estimator, taps and
 /// slices, the radiosity's taps, the number of layers the effects read and the G-buffer encoding

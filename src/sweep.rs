@@ -753,7 +753,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
     let optional: [Column; 22] = [
-        ("AO estimator", |k| format!("{:?}", k.ao_estimator)),
+        ("AO estimator", |k| k.ao_estimator.name().to_string()),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("AO history weight", |k| k.ao_alpha.to_string()),
         ("AO extrapolation", |k| k.ao_extrapolation.to_string()),
@@ -821,12 +821,28 @@ static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
 /// Draws `pareto.png`: one panel per effect, every configuration's relative error (RMSE over the
 /// truth's mean) against the GPU milliseconds of that effect's passes (the final image: of the
-/// whole frame), and its Pareto front ringed and joined.
+/// whole frame), and its Pareto front ringed and joined. Where the grid sweeps the obscurance
+/// estimator, the obscurance panel draws each estimator in its own colour with its own front
+/// (thin line) and a legend, so that each estimator's error against time can be read apart.
 /// Points whose time or error is not finite (a configuration that measured NaN) are left out;
 /// a panel without points is drawn empty.
 pub fn plot_pareto(path: &Path, rows: &[Row], title: &str) -> Result<()> {
     crate::output::write_replacing(path, |tmp| draw_pareto(tmp, path, rows, title))
 }
+
+/// One group of a panel's points: its label, its colour and its (ms, relative error) points.
+type Group = (String, plotters::style::RGBColor, Vec<(f64, f64)>);
+
+/// One panel of [`plot_pareto`]: its caption and its points, in groups drawn each in a colour
+/// (one unlabelled group where nothing splits them).
+struct Panel {
+    name: &'static str,
+    groups: Vec<Group>,
+}
+
+/// Colours of the groups after the first (the first takes the panel's own colour).
+const GROUP_COLOURS: [(u8, u8, u8); 4] =
+    [(255, 127, 14), (148, 103, 189), (44, 160, 44), (140, 86, 75)];
 
 /// Draws [`plot_pareto`]'s picture into `target` (errors name `path`).
 fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<()> {
@@ -835,35 +851,65 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
         |e: &dyn std::fmt::Display| Error::ImageWrite { path: path.into(), message: e.to_string() };
     // Registering twice is harmless; the first registration stays.
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    type Series = (&'static str, RGBColor, Vec<(f64, f64)>);
-    let relative = |e: &ErrorStats| e.rmse / e.truth_mean.max(1e-9);
-    let mut series: Vec<Series> = vec![
-        (
-            "ambient obscurance",
-            RGBColor(31, 119, 180),
-            points(rows, |r| r.ms_of(Effect::Ao), |r| relative(&r.ao)),
-        ),
-        (
+    let relative = |e: &ErrorStats| f64::from(e.rmse / e.truth_mean.max(1e-9));
+    let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let single = |name, colour, points: Vec<(f64, f64)>| Panel {
+        name,
+        groups: vec![(String::new(), colour, points.into_iter().filter(finite).collect())],
+    };
+    // The obscurance's points, one group per estimator the grid holds (in the grid's order).
+    let ao_colour = RGBColor(31, 119, 180);
+    let mut estimators: Vec<AoEstimator> = Vec::new();
+    for r in rows {
+        if !estimators.contains(&r.knobs.ao_estimator) {
+            estimators.push(r.knobs.ao_estimator);
+        }
+    }
+    let ao_groups = estimators
+        .iter()
+        .enumerate()
+        .map(|(i, &estimator)| {
+            let colour = match i {
+                0 => ao_colour,
+                _ => {
+                    let (r, g, b) = GROUP_COLOURS[(i - 1) % GROUP_COLOURS.len()];
+                    RGBColor(r, g, b)
+                }
+            };
+            let points = rows
+                .iter()
+                .filter(|r| r.knobs.ao_estimator == estimator)
+                .map(|r| (r.ms_of(Effect::Ao), relative(&r.ao)))
+                .filter(finite)
+                .collect();
+            let label =
+                if estimators.len() > 1 { estimator.name().to_string() } else { String::new() };
+            (label, colour, points)
+        })
+        .collect();
+    let mut panels_data = vec![
+        Panel { name: "ambient obscurance", groups: ao_groups },
+        single(
             "radiosity (multi-bounce)",
             RGBColor(214, 39, 40),
-            points(rows, |r| r.ms_of(Effect::Radiosity), |r| relative(&r.indirect)),
+            rows.iter().map(|r| (r.ms_of(Effect::Radiosity), relative(&r.indirect))).collect(),
         ),
     ];
     if rows.iter().all(|r| r.reflections.is_some()) {
-        series.push((
+        panels_data.push(single(
             "reflections",
             RGBColor(44, 160, 44),
-            points(
-                rows,
-                |r| r.ms_of(Effect::Reflections),
-                |r| relative(&r.reflections.unwrap_or_default()),
-            ),
+            rows.iter()
+                .map(|r| {
+                    (r.ms_of(Effect::Reflections), relative(&r.reflections.unwrap_or_default()))
+                })
+                .collect(),
         ));
     }
-    series.push((
+    panels_data.push(single(
         "final image (whole frame)",
         RGBColor(90, 90, 90),
-        points(rows, |r| r.total_ms, |r| relative(&r.full)),
+        rows.iter().map(|r| (r.total_ms, relative(&r.full))).collect(),
     ));
     // One panel per effect, each with its own axes: the effects' times and errors differ by
     // orders of magnitude.
@@ -871,10 +917,9 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
     let panels = root.split_evenly((2, 2));
-    for ((name, colour, points), panel) in series.iter().zip(&panels) {
-        let colour = *colour;
-        let points: &Vec<(f64, f64)> =
-            &points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+    for (data, panel) in panels_data.iter().zip(&panels) {
+        let points: Vec<(f64, f64)> =
+            data.groups.iter().flat_map(|(_, _, p)| p.iter().copied()).collect();
         let range = |values: &mut dyn Iterator<Item = f64>| {
             let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
             if lo > hi {
@@ -886,7 +931,7 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
         let x = range(&mut points.iter().map(|p| p.0));
         let y = range(&mut points.iter().map(|p| p.1));
         let mut chart = ChartBuilder::on(panel)
-            .caption(*name, ("sans-serif", 17))
+            .caption(data.name, ("sans-serif", 17))
             .margin(10)
             .x_label_area_size(36)
             .y_label_area_size(56)
@@ -899,18 +944,55 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
             .label_style(("sans-serif", 12))
             .draw()
             .map_err(|e| fail(&e))?;
+        let split = data.groups.len() > 1;
+        for (label, colour, group) in &data.groups {
+            let colour = *colour;
+            let drawn = chart
+                .draw_series(group.iter().map(|p| Circle::new(*p, 3, colour.mix(0.5).filled())))
+                .map_err(|e| fail(&e))?;
+            if split {
+                drawn
+                    .label(label.as_str())
+                    .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
+                // Each group's own front, thin: its error against its time.
+                let front: Vec<(f64, f64)> =
+                    pareto_front(group).into_iter().map(|i| group[i]).collect();
+                chart
+                    .draw_series(LineSeries::new(front, colour.mix(0.8).stroke_width(1)))
+                    .map_err(|e| fail(&e))?;
+            }
+        }
+        // The front over every group, ringed and joined (each ring in its group's colour).
+        let colour_of = |p: &(f64, f64)| {
+            data.groups
+                .iter()
+                .find(|(_, _, g)| g.contains(p))
+                .map_or(RGBColor(0, 0, 0), |(_, c, _)| *c)
+        };
+        let front: Vec<(f64, f64)> = pareto_front(&points).into_iter().map(|i| points[i]).collect();
         chart
-            .draw_series(points.iter().map(|p| Circle::new(*p, 3, colour.mix(0.5).filled())))
+            .draw_series(front.iter().map(|p| Circle::new(*p, 5, colour_of(p).stroke_width(2))))
             .map_err(|e| fail(&e))?;
-        let front: Vec<(f64, f64)> = pareto_front(points).into_iter().map(|i| points[i]).collect();
-        chart
-            .draw_series(front.iter().map(|p| Circle::new(*p, 5, colour.stroke_width(2))))
-            .map_err(|e| fail(&e))?;
-        chart.draw_series(LineSeries::new(front, colour.stroke_width(2))).map_err(|e| fail(&e))?;
+        // A panel of no rows has no group.
+        let line = match data.groups.as_slice() {
+            [(_, colour, _)] => *colour,
+            _ => RGBColor(40, 40, 40),
+        };
+        chart.draw_series(LineSeries::new(front, line.stroke_width(2))).map_err(|e| fail(&e))?;
+        if split {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK.mix(0.4))
+                .label_font(("sans-serif", 12))
+                .draw()
+                .map_err(|e| fail(&e))?;
+        }
     }
     panels
         .last()
-        .filter(|_| series.len() < panels.len())
+        .filter(|_| panels_data.len() < panels.len())
         .map(|p| {
             p.draw_text(
                 "ringed and joined: the Pareto front",
@@ -945,7 +1027,16 @@ mod tests {
             ssim: f32::NAN,
             instability: Instability::default(),
         };
-        for rows in [Vec::new(), vec![row.clone(), row]] {
+        // Two estimators, one measured and one not: the obscurance panel splits into groups, one
+        // of them empty.
+        let fine = ErrorStats { rmse: 0.05, truth_mean: 0.8, ..ErrorStats::default() };
+        let mut sao = row.clone();
+        sao.knobs.ao_estimator = AoEstimator::Sao;
+        sao.passes = vec![("ao".into(), 3.0), ("radiosity".into(), 9.0)];
+        (sao.total_ms, sao.ao, sao.indirect, sao.full) = (40.0, fine, fine, fine);
+        let mut bitmask = row.clone();
+        bitmask.knobs.ao_estimator = AoEstimator::Bitmask;
+        for rows in [Vec::new(), vec![row.clone(), row], vec![sao, bitmask]] {
             let path = dir.join("pareto.png");
             plot_pareto(&path, &rows, "nothing to see").unwrap();
             assert!(image::open(&path).is_ok());
