@@ -111,6 +111,9 @@ struct SweepArgs {
     /// Weights of the obscurance steps' extrapolation.
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_extrapolation))]
     ao_extrapolation: Vec<f32>,
+    /// Radii of the obscurance's blur to sweep, in pixels (0: none).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_blur_radius))]
+    ao_blur_radius: Vec<u32>,
     /// Radiosity slices a frame with the temporal history gathers, to sweep (0: all).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_history_slices))]
     radiosity_history_slices: Vec<u32>,
@@ -280,6 +283,10 @@ struct AoArgs {
     /// Obscurance from layer 0 only (to compare with the two-layer estimator).
     #[arg(long)]
     ao_one_layer: bool,
+    /// Radius of the obscurance's bilateral blur in pixels, 0 to 32 (0: none) [default: 4, or the
+    /// preset's].
+    #[arg(long)]
+    ao_blur_radius: Option<u32>,
     /// Compute the obscurance at 1/N of the image's width and height (1, 2 or 4), upsampled by
     /// depth and normal [default: 1].
     #[arg(long)]
@@ -306,6 +313,7 @@ impl AoArgs {
         ao.downsample = self.ao_downsample.unwrap_or(ao.downsample);
         ao.alpha = self.ao_alpha.unwrap_or(ao.alpha);
         ao.history_slices = self.ao_history_slices.unwrap_or(ao.history_slices);
+        ao.blur_radius = self.ao_blur_radius.unwrap_or(ao.blur_radius);
         if self.ao_one_layer {
             ao.two_layers = false;
         }
@@ -541,7 +549,8 @@ struct RenderArgs {
     /// How the G-buffer stores positions: the depth every pass after the resolve reads back.
     #[arg(long, value_enum, default_value_t = PositionEncoding::ViewDepthF32)]
     position_encoding: PositionEncoding,
-    /// Accuracy preset: tap counts, layers and precision (explicit options override it).
+    /// Accuracy preset: tap counts, slices, the obscurance's blur, layers and precision (explicit
+    /// options override it).
     #[arg(long, value_enum)]
     preset: Option<Preset>,
     /// Raster atomics.
@@ -918,6 +927,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         ao_samples: args.ao_samples,
         ao_alpha: args.ao_alpha,
         ao_extrapolation: args.ao_extrapolation,
+        ao_blur_radius: args.ao_blur_radius,
         radiosity_samples: args.radiosity_samples,
         radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,

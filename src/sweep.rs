@@ -50,6 +50,8 @@ pub struct Knobs {
     pub ao_alpha: f32,
     /// Weight of the obscurance steps' extrapolation ([`AoSettings::extrapolation`]; 0: none).
     pub ao_extrapolation: f32,
+    /// Radius of the obscurance's blur in pixels ([`AoSettings::blur_radius`]; 0: none).
+    pub ao_blur_radius: u32,
     /// Radiosity taps per pixel.
     pub radiosity_samples: u32,
     /// Radiosity slices per pixel (`slices` gather; its taps shared among them).
@@ -122,6 +124,7 @@ impl Knobs {
                 samples: self.ao_samples,
                 alpha: self.ao_alpha,
                 extrapolation: self.ao_extrapolation,
+                blur_radius: self.ao_blur_radius,
                 two_layers: self.layers == 2,
                 mip_offset: self.mip_offset,
                 downsample: self.ao_downsample,
@@ -194,6 +197,8 @@ pub struct Grid {
     pub ao_alpha: Vec<f32>,
     /// Obscurance steps' extrapolation weights.
     pub ao_extrapolation: Vec<f32>,
+    /// Obscurance blur radii.
+    pub ao_blur_radius: Vec<u32>,
     /// Radiosity taps.
     pub radiosity_samples: Vec<u32>,
     /// Radiosity slices.
@@ -251,6 +256,7 @@ impl Default for Grid {
             ao_samples: vec![4, 8, 16, 32, 64],
             ao_alpha: vec![settings.ao.alpha],
             ao_extrapolation: vec![settings.ao.extrapolation],
+            ao_blur_radius: vec![settings.ao.blur_radius],
             radiosity_samples: vec![5, 9, 13, 19, 27],
             radiosity_slices: vec![settings.radiosity.slices],
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
@@ -299,6 +305,7 @@ impl Grid {
             ao_samples: settings.ao.samples,
             ao_alpha: settings.ao.alpha,
             ao_extrapolation: settings.ao.extrapolation,
+            ao_blur_radius: settings.ao.blur_radius,
             radiosity_samples: settings.radiosity.samples,
             radiosity_slices: settings.radiosity.slices,
             radiosity_layer1_samples: settings.radiosity.layer1_samples,
@@ -344,6 +351,7 @@ impl Grid {
         let k = times(k, &self.ao_samples, |k, v| k.ao_samples = v);
         let k = times(k, &self.ao_alpha, |k, v| k.ao_alpha = v);
         let k = times(k, &self.ao_extrapolation, |k, v| k.ao_extrapolation = v);
+        let k = times(k, &self.ao_blur_radius, |k, v| k.ao_blur_radius = v);
         let k = times(k, &self.radiosity_slices, |k, v| k.radiosity_slices = v);
         times(k, &self.radiosity_samples, |k, v| k.radiosity_samples = v)
     }
@@ -651,7 +659,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,ao_blur_radius,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -674,12 +682,13 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
             k.ao_alpha,
             k.ao_extrapolation,
+            k.ao_blur_radius,
             k.radiosity_samples,
             k.radiosity_slices,
             k.radiosity_layer1_samples,
@@ -752,11 +761,12 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 22] = [
+    let optional: [Column; 23] = [
         ("AO estimator", |k| k.ao_estimator.name().to_string()),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("AO history weight", |k| k.ao_alpha.to_string()),
         ("AO extrapolation", |k| k.ao_extrapolation.to_string()),
+        ("AO blur radius", |k| k.ao_blur_radius.to_string()),
         ("radiosity slices", |k| k.radiosity_slices.to_string()),
         ("precision", |k| format!("{:?}", k.precision)),
         ("position", |k| k.position.name().to_string()),

@@ -188,6 +188,7 @@ fn invalid_obscurance_settings_are_refused() {
         (AoSettings { downsample: 0, ..Default::default() }, "ao.downsample"),
         (AoSettings { extrapolation: -0.5, ..Default::default() }, "ao.extrapolation"),
         (AoSettings { extrapolation: f32::INFINITY, ..Default::default() }, "ao.extrapolation"),
+        (AoSettings { blur_radius: 33, ..Default::default() }, "ao.blur_radius"),
         (AoSettings { alpha: 1.0, ..Default::default() }, "ao.alpha"),
         (AoSettings { alpha: f32::NAN, ..Default::default() }, "ao.alpha"),
         (AoSettings { history_slices: 17, ..Default::default() }, "ao.history_slices"),

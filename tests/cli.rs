@@ -151,6 +151,17 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--max-triangles".into(), "10".into()], "limit"),
         (vec!["render".into(), "--ao-slices".into(), "0".into()], "ao.slices"),
         (vec!["render".into(), "--ao-thickness=-1".into()], "ao.thickness"),
+        (vec!["truth".into(), "--ao-blur-radius".into(), "33".into()], "ao.blur_radius"),
+        (
+            vec![
+                "sweep".into(),
+                "--out".into(),
+                "x".into(),
+                "--ao-blur-radius".into(),
+                "2,40".into(),
+            ],
+            "ao.blur_radius",
+        ),
         (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
         (vec!["render".into(), "--reflection-lobe-samples".into(), "0".into()], "lobe_samples"),
         (vec!["truth".into(), "--reflection-thickness=-1".into()], "reflections.thickness"),
@@ -375,6 +386,7 @@ fn sweep_writes_csv_markdown_and_plot_and_repeats_its_errors() {
         for column in [
             "ao_estimator",
             "ao_slices",
+            "ao_blur_radius",
             "ao_rmse",
             "indirect_instability",
             "image_rmse",

@@ -235,9 +235,11 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
     let mut ultra = Settings::default();
     Preset::Ultra.apply(&mut ultra);
     assert_eq!(
-        (ultra.ao.samples, ultra.ao.slices, ultra.radiosity.samples, ultra.layers),
-        (64, 2, 64, 0)
+        (ultra.ao.samples, ultra.ao.slices, ultra.ao.blur_radius, ultra.radiosity.samples),
+        (64, 4, 3, 64)
     );
+    assert_eq!(ultra.layers, 0);
+    assert_eq!(low.ao.blur_radius, Settings::default().ao.blur_radius);
     assert!(ultra.ao.two_layers);
     assert!(ultra.reflections.shadow_maps);
     for preset in [Preset::Low, Preset::Balanced, Preset::High, Preset::Ultra] {
