@@ -243,6 +243,10 @@ struct TruthArgs {
     /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// The GPU estimate's accuracy preset (with --compare), as `render --preset` takes it;
+    /// explicit options override it.
+    #[arg(long, value_enum)]
+    preset: Option<Preset>,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
     #[command(flatten)]
     estimators: EffectArgs,
@@ -719,6 +723,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     // has their radius.
     let mut settings = scaled_defaults(&scene);
     (settings.width, settings.height) = (w, h);
+    if let Some(preset) = args.preset {
+        preset.apply(&mut settings);
+    }
     args.estimators.apply(&mut settings);
     settings.validate()?;
     let ao = settings.ao.clone();

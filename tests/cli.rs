@@ -306,6 +306,22 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     // The GPU's own values, not the truth's, and obscured in places.
     assert_ne!(truth, estimate);
     assert!(estimate.iter().any(|v| *v > 0.0 && *v < 0.9), "{estimate:?}");
+    // A preset reaches the estimate (`high`: 64 taps on 4 slices), and an explicit option
+    // overrides the preset's (its 64 taps back to the default's 32 on 2 slices, radius 4).
+    let with = |args: &[&str], file: &str| {
+        let output = cli()
+            .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--compare"])
+            .args(args)
+            .arg("--estimate-exr")
+            .arg(dir.join(file))
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        read(file)
+    };
+    assert_ne!(with(&["--preset", "high"], "high.exr"), estimate);
+    let overridden = ["--preset", "high", "--ao-samples", "32", "--ao-slices", "2"];
+    assert_eq!(with(&[&overridden[..], &["--ao-blur-radius", "4"]].concat(), "back.exr"), estimate);
     // --estimate-exr needs --compare.
     let output = cli()
         .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--estimate-exr"])
