@@ -257,7 +257,7 @@ impl Default for Grid {
             ao_alpha: vec![settings.ao.alpha],
             ao_extrapolation: vec![settings.ao.extrapolation],
             ao_blur_radius: vec![settings.ao.blur_radius],
-            radiosity_samples: vec![5, 9, 13, 19, 27],
+            radiosity_samples: vec![16, 32, 64],
             radiosity_slices: vec![settings.radiosity.slices],
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
             radiosity_history_slices: vec![settings.radiosity.history_slices],
