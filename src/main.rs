@@ -247,6 +247,10 @@ struct TruthArgs {
     /// explicit options override it.
     #[arg(long, value_enum)]
     preset: Option<Preset>,
+    /// The GPU estimate's minimum separation of layer 1 behind layer 0 (with --compare), in
+    /// scene units [default: 0.05 times the scene's scale].
+    #[arg(long, allow_hyphen_values = true)]
+    dz: Option<f32>,
     /// The obscurance's radius, and the GPU estimate's other settings (with --compare).
     #[command(flatten)]
     estimators: EffectArgs,
@@ -726,6 +730,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     if let Some(preset) = args.preset {
         preset.apply(&mut settings);
     }
+    settings.dz = args.dz.unwrap_or(settings.dz);
     args.estimators.apply(&mut settings);
     settings.validate()?;
     let ao = settings.ao.clone();

@@ -143,6 +143,7 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         (vec!["render".into(), "--camera".into(), "eye=1,2".into()], "camera"),
         (vec!["render".into(), "--camera".into(), "eye=0,1,0,target=0,1,0".into()], "coincide"),
         (vec!["render".into(), "--dz=-1".into()], "dz"),
+        (vec!["truth".into(), "--dz".into(), "-1".into()], "dz"),
         (vec!["render".into(), "--size".into(), "20000x10".into()], "size"),
         (vec!["render".into(), "--camera".into(), "near=-1".into()], "near"),
         (vec!["render".into(), "--camera".into(), "near=2,far=1".into()], "far"),
