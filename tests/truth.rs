@@ -180,6 +180,19 @@ fn obscurance_error(scene: &Scene, settings: Settings, truth: &TruthImage) -> me
     metrics::compare(&estimate, &mask, truth)
 }
 
+/// The sphere field at 64x48, its settings with the lengths as the command line scales them to
+/// the scene, and its obscurance truth.
+fn sphere_field_obscurance() -> (Scene, Settings, TruthImage) {
+    let scene = Scene::from_spec("builtin:grid-20000").unwrap();
+    let (w, h) = (64, 48);
+    let base = Settings {
+        timings: false,
+        ..Settings::with_size(w, h).scaled(Settings::scale_for(scene.extent()))
+    };
+    let truth = obscurance_truth(&scene, (w, h), &base.ao);
+    (scene, base, truth)
+}
+
 /// The error of the GPU's obscurance against the truth falls as its tap count rises (the blur is
 /// off so the taps alone decide the noise), and never below the truth's own noise floor.
 #[test]
@@ -211,14 +224,7 @@ fn gpu_obscurance_error_falls_as_its_samples_rise() {
 /// +0.0073, RMSE 0.0527 -> 0.0448 when written).
 #[test]
 fn the_steps_extrapolation_removes_most_of_the_obscurances_bias() {
-    let scene = Scene::from_spec("builtin:grid-20000").unwrap();
-    let (w, h) = (64, 48);
-    // The lengths as the command line scales them to the scene.
-    let base = Settings {
-        timings: false,
-        ..Settings::with_size(w, h).scaled(Settings::scale_for(scene.extent()))
-    };
-    let truth = obscurance_truth(&scene, (w, h), &base.ao);
+    let (scene, base, truth) = sphere_field_obscurance();
     let error = |extrapolation| {
         let mut settings = base.clone();
         settings.ao.extrapolation = extrapolation;
@@ -239,13 +245,7 @@ fn the_steps_extrapolation_removes_most_of_the_obscurances_bias() {
 /// 0.0344 when written; the README has the three scenes at 160x120 and 320x240).
 #[test]
 fn the_high_presets_slices_and_blur_come_closer_than_its_taps_on_two_slices() {
-    let scene = Scene::from_spec("builtin:grid-20000").unwrap();
-    let (w, h) = (64, 48);
-    let base = Settings {
-        timings: false,
-        ..Settings::with_size(w, h).scaled(Settings::scale_for(scene.extent()))
-    };
-    let truth = obscurance_truth(&scene, (w, h), &base.ao);
+    let (scene, base, truth) = sphere_field_obscurance();
     let mut two_slices = base.clone();
     two_slices.ao.samples = 64;
     let mut high = base.clone();
