@@ -1007,7 +1007,12 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
     );
     sweep::write_csv(&args.out.join("sweep.csv"), &rows)?;
     sweep::write_markdown(&args.out.join("sweep.md"), &rows, &heading)?;
-    sweep::plot_pareto(&args.out.join("pareto.png"), &rows, &format!("{} at {w}x{h}", args.scene))?;
+    // The plot's title names the file alone (a long path would run off the picture); sweep.md
+    // keeps the path as given.
+    let name = std::path::Path::new(&args.scene)
+        .file_name()
+        .map_or_else(|| args.scene.clone(), |n| n.to_string_lossy().into_owned());
+    sweep::plot_pareto(&args.out.join("pareto.png"), &rows, &format!("{name} at {w}x{h}"))?;
     println!("{heading}");
     println!("{} configurations -> {}", rows.len(), args.out.display());
     Ok(())
