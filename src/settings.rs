@@ -170,19 +170,16 @@ impl Preset {
     /// Applies the preset's knobs to `settings` (the radiosity on 2 slices; the obscurance on 2,
     /// or 4 with a narrower blur from `High` on).
     pub fn apply(self, settings: &mut Settings) {
-        let (ao, radiosity, layers, precision, downsample) = match self {
-            Preset::Low => (32, 32, 1, Precision::Full, 2),
-            Preset::Balanced => (32, 32, 2, Precision::Full, 1),
-            Preset::High => (64, 32, 2, Precision::Full, 1),
-            Preset::Ultra => (64, 64, 2, Precision::Full, 1),
+        let blur = AoSettings::default().blur_radius;
+        // Obscurance taps, slices and blur radius, radiosity taps, layers, resolution divisor.
+        let (ao, ao_slices, ao_blur, radiosity, layers, downsample) = match self {
+            Preset::Low => (32, 2, blur, 32, 1, 2),
+            Preset::Balanced => (32, 2, blur, 32, 2, 1),
+            Preset::High => (64, 4, 3, 32, 2, 1),
+            Preset::Ultra => (64, 4, 3, 64, 2, 1),
         };
         settings.ao.downsample = downsample;
         settings.radiosity.downsample = downsample;
-        let (ao_slices, ao_blur) = match self {
-            Preset::Low | Preset::Balanced => (2, AoSettings::default().blur_radius),
-            Preset::High | Preset::Ultra => (4, 3),
-        };
-        let radiosity_slices = 2;
         settings.ao.estimator = AoEstimator::Bitmask;
         settings.ao.samples = ao;
         settings.ao.slices = ao_slices;
@@ -190,11 +187,11 @@ impl Preset {
         settings.ao.two_layers = layers == 2;
         settings.radiosity.estimator = RadiosityEstimator::Slices;
         settings.radiosity.samples = radiosity;
-        settings.radiosity.slices = radiosity_slices;
+        settings.radiosity.slices = 2;
         // Two layers where an effect reads them (the plan decides), never forced on a scene
         // that needs none.
         settings.layers = if layers == 1 { 1 } else { 0 };
-        settings.precision = precision;
+        settings.precision = Precision::Full;
         settings.reflections.shadow_maps = self != Preset::Low;
     }
 }

@@ -850,9 +850,9 @@ struct Panel {
     groups: Vec<Group>,
 }
 
-/// Colours of the groups after the first (the first takes the panel's own colour).
-const GROUP_COLOURS: [(u8, u8, u8); 4] =
-    [(255, 127, 14), (148, 103, 189), (44, 160, 44), (140, 86, 75)];
+/// Colours of the obscurance panel's groups, in the grid's order of its estimators (the first,
+/// the panel's colour where nothing splits it).
+const AO_COLOURS: [(u8, u8, u8); 3] = [(31, 119, 180), (255, 127, 14), (148, 103, 189)];
 
 /// Draws [`plot_pareto`]'s picture into `target` (errors name `path`).
 fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<()> {
@@ -861,14 +861,13 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
         |e: &dyn std::fmt::Display| Error::ImageWrite { path: path.into(), message: e.to_string() };
     // Registering twice is harmless; the first registration stays.
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    let relative = |e: &ErrorStats| f64::from(e.rmse / e.truth_mean.max(1e-9));
+    let relative = |e: &ErrorStats| e.rmse / e.truth_mean.max(1e-9);
     let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
     let single = |name, colour, points: Vec<(f64, f64)>| Panel {
         name,
         groups: vec![(String::new(), colour, points.into_iter().filter(finite).collect())],
     };
     // The obscurance's points, one group per estimator the grid holds (in the grid's order).
-    let ao_colour = RGBColor(31, 119, 180);
     let mut estimators: Vec<AoEstimator> = Vec::new();
     for r in rows {
         if !estimators.contains(&r.knobs.ao_estimator) {
@@ -879,22 +878,16 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
         .iter()
         .enumerate()
         .map(|(i, &estimator)| {
-            let colour = match i {
-                0 => ao_colour,
-                _ => {
-                    let (r, g, b) = GROUP_COLOURS[(i - 1) % GROUP_COLOURS.len()];
-                    RGBColor(r, g, b)
-                }
-            };
+            let (r, g, b) = AO_COLOURS[i % AO_COLOURS.len()];
             let points = rows
                 .iter()
                 .filter(|r| r.knobs.ao_estimator == estimator)
-                .map(|r| (r.ms_of(Effect::Ao), relative(&r.ao)))
+                .map(|r| (r.ms_of(Effect::Ao), f64::from(relative(&r.ao))))
                 .filter(finite)
                 .collect();
             let label =
                 if estimators.len() > 1 { estimator.name().to_string() } else { String::new() };
-            (label, colour, points)
+            (label, RGBColor(r, g, b), points)
         })
         .collect();
     let mut panels_data = vec![
@@ -902,24 +895,24 @@ fn draw_pareto(target: &Path, path: &Path, rows: &[Row], title: &str) -> Result<
         single(
             "radiosity (multi-bounce)",
             RGBColor(214, 39, 40),
-            rows.iter().map(|r| (r.ms_of(Effect::Radiosity), relative(&r.indirect))).collect(),
+            points(rows, |r| r.ms_of(Effect::Radiosity), |r| relative(&r.indirect)),
         ),
     ];
     if rows.iter().all(|r| r.reflections.is_some()) {
         panels_data.push(single(
             "reflections",
             RGBColor(44, 160, 44),
-            rows.iter()
-                .map(|r| {
-                    (r.ms_of(Effect::Reflections), relative(&r.reflections.unwrap_or_default()))
-                })
-                .collect(),
+            points(
+                rows,
+                |r| r.ms_of(Effect::Reflections),
+                |r| relative(&r.reflections.unwrap_or_default()),
+            ),
         ));
     }
     panels_data.push(single(
         "final image (whole frame)",
         RGBColor(90, 90, 90),
-        rows.iter().map(|r| (r.total_ms, relative(&r.full))).collect(),
+        points(rows, |r| r.total_ms, |r| relative(&r.full)),
     ));
     // One panel per effect, each with its own axes: the effects' times and errors differ by
     // orders of magnitude.
