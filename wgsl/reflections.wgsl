@@ -265,10 +265,64 @@ fn layer_hit(q: u32, r: vec3<f32>, xy_in: vec2<f32>, z_in: f32, xy_out: vec2<f32
     return 2u;
 }
 
-// The direct light that sample s at pixel q sends back along the view-space ray direction d:
-// the lights (past their shadow maps) re-evaluated towards the point the ray left, so that a
+// A GGX roughness widened by `blur` (the spread, as a GGX alpha, of the directions the
+// reflecting pixel gathers through the ray that met it) and by the turn of a curved surface's
+// normal over the patch those directions cover `t` away (`curvature`, radians per unit): a
+// sharp highlight is averaged over the lobe it is seen through, as the truth's rays average it,
+// instead of taken where one direction happens to land.
+fn widened_roughness(roughness: f32, blur: f32, t: f32, curvature: f32) -> f32 {
+    let widened = blur * (1.0 + t * min(curvature, 1e6));
+    let a = roughness * roughness;
+    return sqrt(sqrt(a * a + widened * widened));
+}
+
+// The first word of pixel q's `layer`.
+fn layer_word(q: u32, layer: u32) -> GWord {
+    if layer == 1u {
+        return gbuffer1[q * G_WORDS];
+    }
+    return gbuffer[q * G_WORDS];
+}
+
+// The curvature (radians of normal per unit) of `layer`'s surface at pixel q, from its
+// neighbours on either side along each axis where both hold the same surface (within a tenth
+// of its depth); the larger of the two axes.
+fn layer_curvature(q: u32, layer: u32) -> f32 {
+    let d = gword_depth(layer_word(q, layer));
+    let pixel = vec2<i32>(i32(q % frame.width), i32(q / frame.width));
+    var curvature = 0.0;
+    for (var axis = 0u; axis < 2u; axis++) {
+        let step = select(vec2<i32>(0, 1), vec2<i32>(1, 0), axis == 0u);
+        let a0 = pixel - step;
+        let a1 = pixel + step;
+        if all(a0 >= vec2<i32>(0)) && a1.x < i32(frame.width) && a1.y < i32(frame.height) {
+            let w0 = layer_word(u32(a0.y) * frame.width + u32(a0.x), layer);
+            let w1 = layer_word(u32(a1.y) * frame.width + u32(a1.x), layer);
+            let d0 = gword_depth(w0);
+            let d1 = gword_depth(w1);
+            if d0 > 0.0 && d1 > 0.0 && abs(d0 - d) < 0.1 * d && abs(d1 - d) < 0.1 * d {
+                let p0 = view_position(frame, vec2<f32>(a0) + 0.5, d0);
+                let p1 = view_position(frame, vec2<f32>(a1) + 0.5, d1);
+                let len = length(p1 - p0);
+                let c = length(gword_normal(w1) - gword_normal(w0)) / len;
+                if len > 0.0 && c < 1e30 {
+                    curvature = max(curvature, c);
+                }
+            }
+        }
+    }
+    return curvature;
+}
+
+// The direct light that sample s at pixel q of `layer` sends back along the view-space ray
+// direction d, which came `t` from the reflecting point through a lobe of spread `blur`: the
+// lights (past their shadow maps) re-evaluated towards the point the ray left, so that a
 // highlight shows where the reflecting surface sees it, not where the camera does.
-fn relit(s: GSample, q: u32, d: vec3<f32>) -> vec3<f32> {
+fn relit(s_in: GSample, q: u32, layer: u32, d: vec3<f32>, blur: f32, t: f32) -> vec3<f32> {
+    var s = s_in;
+    if blur > 0.0 {
+        s.roughness = widened_roughness(s.roughness, blur, t, layer_curvature(q, layer));
+    }
     let centre = vec2<f32>(f32(q % frame.width), f32(q / frame.width)) + 0.5;
     let world = mat_mul(frame.inv_view, vec4<f32>(view_position(frame, centre, s.depth), 1.0)).xyz;
     let v = -normalize(mat_mul(frame.inv_view, vec4<f32>(d, 0.0)).xyz);
@@ -276,10 +330,11 @@ fn relit(s: GSample, q: u32, d: vec3<f32>) -> vec3<f32> {
 }
 
 // What a ray along view-space direction d that hits `layer` at pixel q sees: the surface as the
-// image shows it (shade.wgsl), its direct light re-evaluated towards the ray's origin. Layer 1
+// image shows it (shade.wgsl), its direct light re-evaluated towards the ray's origin `t` away
+// and widened by the lobe's spread `blur` (relit). Layer 1
 // has no gathered irradiance or obscurance of its own: the ambient term reaches it through the
 // obscurance of layer 0 at the same pixel, its nearest neighbourhood.
-fn seen_at(q: u32, layer: u32, d: vec3<f32>) -> vec3<f32> {
+fn seen_at(q: u32, layer: u32, d: vec3<f32>, blur: f32, t: f32) -> vec3<f32> {
     var visibility = 1.0;
 #if AO
     visibility = av[q];
@@ -291,14 +346,14 @@ fn seen_at(q: u32, layer: u32, d: vec3<f32>) -> vec3<f32> {
 #else
         let s1 = gbuffer_decode(w, gbuffer1[q * G_WORDS + 1u], gbuffer1[q * G_WORDS + 2u], gbuffer1[q * G_WORDS + 3u]);
 #endif
-        return shaded(s1, relit(s1, q, d), visibility, vec4<f32>(0.0), params.ambient);
+        return shaded(s1, relit(s1, q, 1u, d, blur, t), visibility, vec4<f32>(0.0), params.ambient);
     }
     var e = vec4<f32>(0.0);
 #if RADIOSITY
     e = irradiance[q];
 #endif
     let s0 = sample_at(q);
-    return shaded(s0, relit(s0, q, d), visibility, e, params.ambient);
+    return shaded(s0, relit(s0, q, 0u, d, blur, t), visibility, e, params.ambient);
 }
 
 // Where a reflected ray first meets a layer: pixel q, the layer (2: none) and the screen
@@ -472,18 +527,27 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     let v = m.v;
     let r = m.r;
     let hit = march(pixel, s.depth, p, r);
-    // What the mirror ray sees.
-    var mirror = environment_view(r);
-    var mirror_trust = 0.0;
-    if hit.layer < 2u {
-        mirror_trust = edge_confidence(hit.xy);
-        mirror = mix(mirror, seen_at(hit.q, hit.layer, r), mirror_trust);
-    }
     // How far the mirror ray went on screen, to what it hit (its reach for the lobe below).
     var went = 0.0;
     if hit.layer != 2u {
         let centre = vec2<f32>(f32(hit.q % frame.width), f32(hit.q / frame.width)) + 0.5;
         went = length(view_position(frame, centre, layer_depth(hit.q, min(hit.layer, 1u))) - p);
+    }
+    // The directions taken over a rough surface's glossy lobe (1: the mirror ray alone): all of
+    // them from roughness 0.5 up, fewer (at least two) in proportion below. Each stands for
+    // 1 / k of the lobe, and what it hits is widened by that share's spread (alpha / sqrt k).
+    let alpha = s.roughness * s.roughness;
+    var k = 1u;
+    if alpha > 0.0 && params.lobe_samples > 1u {
+        k = clamp(u32(ceil(f32(params.lobe_samples) * min(2.0 * s.roughness, 1.0))), 2u, params.lobe_samples);
+    }
+    let blur = select(0.0, alpha / sqrt(f32(k)), alpha > 0.0);
+    // What the mirror ray sees.
+    var mirror = environment_view(r);
+    var mirror_trust = 0.0;
+    if hit.layer < 2u {
+        mirror_trust = edge_confidence(hit.xy);
+        mirror = mix(mirror, seen_at(hit.q, hit.layer, r, blur, went), mirror_trust);
     }
 #if SHADOWS
 #if FOLLOW
@@ -507,8 +571,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     }
 #endif
 #endif
-    let alpha = s.roughness * s.roughness;
-    if !(alpha > 0.0) || params.lobe_samples <= 1u {
+    if k == 1u {
         return vec4<f32>(s.reflectivity * mirror, mirror_trust);
     }
     // A glossy lobe: each direction the lobe reflects into is taken to travel as far as the
@@ -516,9 +579,6 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
     // within the thickness plus a quarter of that distance of it; otherwise it sees what the
     // mirror ray saw. When the mirror ray found nothing, each direction sees the environment.
     let reach = select(-1.0, went, hit.layer < 2u);
-    // The lobe widens with the roughness: all its directions from roughness 0.5 up, fewer
-    // (at least two) in proportion below.
-    let k = clamp(u32(ceil(f32(params.lobe_samples) * min(2.0 * s.roughness, 1.0))), 2u, params.lobe_samples);
     var sum = vec3<f32>(0.0);
     var trust = 0.0;
     for (var i = 0u; i < k; i++) {
@@ -548,7 +608,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
                 }
                 if layer < 2u {
                     confidence = edge_confidence(xy);
-                    colour = mix(environment_view(l), seen_at(q, layer, l), confidence);
+                    colour = mix(environment_view(l), seen_at(q, layer, l, blur, reach), confidence);
                 }
             }
         }
@@ -777,9 +837,7 @@ fn hidden_seen(h: HiddenHit, d: vec3<f32>, blur: f32) -> vec3<f32> {
             }
         }
     }
-    let widened = blur * (1.0 + h.t * min(curvature, 1e6));
-    let a = s.roughness * s.roughness;
-    s.roughness = sqrt(sqrt(a * a + widened * widened));
+    s.roughness = widened_roughness(s.roughness, blur, h.t, curvature);
     let world = w[0] * h.bary.x + w[1] * h.bary.y + w[2] * h.bary.z;
     return shaded(s, lit(s, world, -d, params.light_count, params.pcf).radiance, 1.0, vec4<f32>(0.0), params.ambient);
 }

@@ -226,24 +226,70 @@ pub struct HitShading<'a> {
 
 impl HitShading<'_> {
     /// As `seen_at`: what a ray along view-space direction `d` that hits `layer` at pixel q
-    /// sees, its direct light re-evaluated towards the ray's origin (`relit`).
+    /// sees, its direct light re-evaluated towards the ray's origin `t` away, widened by the
+    /// lobe's spread `blur` (`relit`).
+    #[allow(clippy::too_many_arguments)]
     fn seen(
         &self,
         f: &FrameUniform,
         layers: [&[GSample]; 2],
         (q, layer): (usize, u32),
         d: Vec3,
+        (blur, t): (f32, f32),
         ambient: Vec3,
     ) -> Vec3 {
         let visibility = self.av.map_or(1.0, |a| a[q]);
-        let s = &layers[layer as usize][q];
+        let mut s = layers[layer as usize][q];
+        if blur > 0.0 {
+            let curvature = layer_curvature(f, layers[layer as usize], q);
+            s.roughness = widened_roughness(s.roughness, blur, t, curvature);
+        }
         let centre = Vec2::new((q as u32 % f.width) as f32, (q as u32 / f.width) as f32) + 0.5;
         let world = mat_mul(&f.inv_view, view_position(f, centre, s.depth).extend(1.0).to_array());
         let v = -mat_mul(&f.inv_view, d.extend(0.0).to_array()).xyz().normalize();
-        let direct = lit(s, world.xyz(), v, self.lights, self.shadows).0;
+        let direct = lit(&s, world.xyz(), v, self.lights, self.shadows).0;
         let e = if layer == 1 { Vec4::ZERO } else { self.irradiance.map_or(Vec4::ZERO, |e| e[q]) };
-        shaded(s, direct, visibility, e, ambient)
+        shaded(&s, direct, visibility, e, ambient)
     }
+}
+
+/// As `widened_roughness`: a GGX roughness widened by `blur` (the spread, as a GGX alpha, of the
+/// directions a reflecting pixel gathers through the ray that met the surface) and by the turn
+/// of a curved surface's normal over the patch those directions cover `t` away.
+fn widened_roughness(roughness: f32, blur: f32, t: f32, curvature: f32) -> f32 {
+    let widened = blur * (1.0 + t * curvature.min(1e6));
+    let a = roughness * roughness;
+    (a * a + widened * widened).sqrt().sqrt()
+}
+
+/// As `layer_curvature`: the curvature (radians of normal per unit) of a layer's surface at
+/// pixel q, from its neighbours either side along each axis that hold the same surface.
+fn layer_curvature(f: &FrameUniform, layer: &[GSample], q: usize) -> f32 {
+    let d = layer[q].depth;
+    let (x, y) = ((q as u32 % f.width) as i32, (q as u32 / f.width) as i32);
+    let mut curvature = 0.0f32;
+    for (sx, sy) in [(1i32, 0i32), (0, 1)] {
+        let (x0, y0, x1, y1) = (x - sx, y - sy, x + sx, y + sy);
+        if x0 < 0 || y0 < 0 || x1 >= f.width as i32 || y1 >= f.height as i32 {
+            continue;
+        }
+        let s0 = &layer[(y0 as u32 * f.width + x0 as u32) as usize];
+        let s1 = &layer[(y1 as u32 * f.width + x1 as u32) as usize];
+        if s0.depth > 0.0
+            && s1.depth > 0.0
+            && (s0.depth - d).abs() < 0.1 * d
+            && (s1.depth - d).abs() < 0.1 * d
+        {
+            let p0 = view_position(f, Vec2::new(x0 as f32, y0 as f32) + 0.5, s0.depth);
+            let p1 = view_position(f, Vec2::new(x1 as f32, y1 as f32) + 0.5, s1.depth);
+            let len = (p1 - p0).length();
+            let c = (s1.normal - s0.normal).length() / len;
+            if len > 0.0 && c < 1e30 {
+                curvature = curvature.max(c);
+            }
+        }
+    }
+    curvature
 }
 
 /// A unit vector's orthonormal tangents (Duff et al. 2017), as `tangents`.
@@ -349,19 +395,27 @@ pub fn reflections(
                 followed.push((pi, follow));
             }
             let hit = hit.filter(|&(_, layer, _)| layer < 2);
+            // As the kernel: k lobe directions (1: the mirror ray alone), each widening what it
+            // hits by its share's spread.
+            let alpha = s.roughness * s.roughness;
+            let k = if alpha > 0.0 && u.lobe_samples > 1 {
+                let share = (2.0 * s.roughness).min(1.0);
+                ((u.lobe_samples as f32 * share).ceil() as u32).clamp(2, u.lobe_samples)
+            } else {
+                1
+            };
+            let blur = if alpha > 0.0 { alpha / (k as f32).sqrt() } else { 0.0 };
             if let Some((q, layer, xy)) = hit {
                 mirror_trust = edge_confidence(xy);
-                mirror = mirror.lerp(shading.seen(f, layers, (q, layer), r, ambient), mirror_trust);
+                let seen = shading.seen(f, layers, (q, layer), r, (blur, went), ambient);
+                mirror = mirror.lerp(seen, mirror_trust);
             }
-            let alpha = s.roughness * s.roughness;
-            if alpha.is_nan() || alpha <= 0.0 || u.lobe_samples <= 1 {
+            if k == 1 {
                 out[pi] = (s.reflectivity * mirror).extend(mirror_trust);
                 continue;
             }
             // As the kernel: lobe directions travel as far as the mirror ray did.
             let reach = hit.map(|_| went);
-            let share = (2.0 * s.roughness).min(1.0);
-            let k = ((u.lobe_samples as f32 * share).ceil() as u32).clamp(2, u.lobe_samples);
             let (mut sum, mut trust) = (Vec3::ZERO, 0.0);
             for i in 0..k {
                 let uv = Vec2::new((i as f32 + 0.5) / k as f32, (i as f32 * GOLDEN).fract());
@@ -388,7 +442,8 @@ pub fn reflections(
                         };
                         if let Some(layer) = layer {
                             confidence = edge_confidence(xy);
-                            let seen = shading.seen(f, layers, (q, layer), l, ambient);
+                            let seen =
+                                shading.seen(f, layers, (q, layer), l, (blur, reach), ambient);
                             colour = sky(l).lerp(seen, confidence);
                         }
                     }
@@ -597,9 +652,7 @@ impl Hidden<'_> {
                 }
             }
         }
-        let widened = blur * (1.0 + t * curvature.min(1e6));
-        let a = s.roughness * s.roughness;
-        s.roughness = (a * a + widened * widened).sqrt().sqrt();
+        s.roughness = widened_roughness(s.roughness, blur, t, curvature);
         let world = w[0] * bary.x + w[1] * bary.y + w[2] * bary.z;
         let direct = lit(&s, world, -d, self.lights, Some(self.shadows)).0;
         shaded(&s, direct, 1.0, Vec4::ZERO, Vec3::from(self.u.ambient))
