@@ -341,6 +341,10 @@ struct RadiosityArgs {
     /// Radiosity taps per pixel [default: 32, or the preset's].
     #[arg(long)]
     radiosity_samples: Option<u32>,
+    /// How far a surface the slices gather finds reaches behind itself, as a fraction of the
+    /// gather's radius (no deeper than layer 1's surface) [default: 0.75].
+    #[arg(long)]
+    radiosity_thickness: Option<f32>,
     /// Slices per pixel of the slices gather [default: 2].
     #[arg(long)]
     radiosity_slices: Option<u32>,
@@ -381,6 +385,7 @@ impl RadiosityArgs {
         r.radius = self.radiosity_radius.unwrap_or(r.radius);
         r.estimator = self.radiosity_estimator.unwrap_or(r.estimator);
         r.samples = self.radiosity_samples.unwrap_or(r.samples);
+        r.thickness = self.radiosity_thickness.unwrap_or(r.thickness);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
         r.layer1_samples = self.radiosity_layer1_samples.unwrap_or(r.layer1_samples);
         r.history_slices = self.radiosity_history_slices.unwrap_or(r.history_slices);
