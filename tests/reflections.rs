@@ -3,11 +3,13 @@
 
 mod common;
 
-use common::{GBUFFER_FIXTURES, assert_few_differ, gpu, read4, render, shade_fixture};
+use common::{
+    GBUFFER_FIXTURES, assert_few_differ, gpu, mirror, mirror_before_a_wall, read4, render,
+    shade_fixture,
+};
 use deep_gbuffer::cpu::{reflections as cpu, shadow as cpu_shadow};
 use deep_gbuffer::frame::ReflectionsUniform;
 use deep_gbuffer::scene::{GpuLight, Material, MeshData};
-use deep_gbuffer::truth::{Shot, Tracer, metrics};
 use deep_gbuffer::{Camera, Environment, Error, Renderer, Scene, SceneBuffers, Settings};
 use glam::{Vec3, Vec4};
 
@@ -76,52 +78,6 @@ fn march_matches(
     let hits = expected.iter().filter(|v| v.w > 0.5).count();
     assert!(hits > 10, "{what}: some rays hit neighbouring spheres or the ground ({hits})");
     expected
-}
-
-/// A black, double-sided mirror: reflectivity 1, roughness 0.
-fn mirror() -> Material {
-    Material {
-        name: "mirror".into(),
-        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
-        reflectivity: 1.0,
-        roughness: 0.0,
-        double_sided: true,
-        ..Default::default()
-    }
-}
-
-/// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
-/// it at `wall_z`, `half_width` either side of x = 0 and `height` tall.
-fn mirror_before_a_wall(wall: Material, wall_z: f32, half_width: f32, height: f32) -> Scene {
-    let mut scene = Scene::default();
-    scene.materials.push(mirror());
-    scene.materials.push(Material { double_sided: true, ..wall });
-    let side = 4.0 * half_width.max(-wall_z);
-    let floor = [
-        Vec3::new(-side, 0.0, -side),
-        Vec3::new(side, 0.0, -side),
-        Vec3::new(side, 0.0, side),
-        Vec3::new(-side, 0.0, side),
-    ];
-    let quad = [
-        Vec3::new(-half_width, 0.0, wall_z),
-        Vec3::new(half_width, 0.0, wall_z),
-        Vec3::new(half_width, height, wall_z),
-        Vec3::new(-half_width, height, wall_z),
-    ];
-    for (quad, material) in [(floor, 0), (quad, 1)] {
-        scene
-            .push_mesh(MeshData {
-                positions: &quad,
-                normals: &[],
-                uvs: &[],
-                indices: &[0, 1, 2, 0, 2, 3],
-                material,
-                ..MeshData::default()
-            })
-            .unwrap();
-    }
-    scene
 }
 
 /// A mirror pixel's view ray, mirrored in the floor, worked out in closed form.
@@ -656,60 +612,4 @@ fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
     }
     assert!(counted > 20, "mirrored rays meet the hidden face ({counted})");
     assert_eq!(shown, counted, "mirror pixels that show the lit face");
-}
-
-/// A glossy floor (roughness 0.3) before a polished metal wall (roughness 0.15) lit by a low
-/// sun, whose highlight the floor reflects: each floor pixel's lobe spreads over the wall's sharp
-/// highlight, which the truth averages over 1024 random directions. The GPU takes a few lobe
-/// directions and widens what each one hits by its share of the lobe (alpha / sqrt k), so that
-/// a sharp highlight is averaged rather than taken where one direction happens to land. Its
-/// error against the truth stays within twice the truth's mean from the mirror ray alone to 16
-/// directions, and within a factor of two of itself; shaded at each hit's own roughness, the
-/// RMSE read 17.6, 8.6, 5.6, 4.5 and 2.6 for 1, 2, 4, 8 and 16 directions (truth mean 1.61), and
-/// 2.04, 2.84, 2.87, 2.71 and 1.87 widened. What remains is mostly the floor nearer the camera,
-/// whose mirror ray passes over the wall while the tail of its lobe meets the highlight: lobe
-/// directions are followed only as far as the mirror ray went.
-#[test]
-fn a_glossy_floor_averages_a_sharp_highlight_over_its_lobe() {
-    let metal = Material {
-        name: "metal".into(),
-        base_color: Vec4::new(0.9, 0.8, 0.7, 1.0),
-        metallic: 1.0,
-        roughness: 0.15,
-        ..Default::default()
-    };
-    let mut scene = mirror_before_a_wall(metal, -1.0, 1.0, 1.0);
-    scene.materials[0].roughness = 0.3;
-    scene.lights.push(deep_gbuffer::scene::Light {
-        name: "sun".into(),
-        kind: deep_gbuffer::scene::LightKind::Directional {
-            direction: Vec3::new(0.0, -0.45, -1.0).normalize(),
-        },
-        color: Vec3::ONE,
-        intensity: 3.0,
-        casts_shadows: true,
-    });
-    let camera =
-        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
-    let (w, h) = (64u32, 48u32);
-    let tracer = Tracer::new(&scene).unwrap();
-    let shot = Shot { camera: &camera, size: (w, h), spp: 1024, seed: 5 };
-    let truth = tracer.reflections(&scene, &shot, None, 1, &|| ()).unwrap();
-    let g = gpu();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
-    let error = |lobe_samples: u32| {
-        let reflections = deep_gbuffer::ReflectionSettings { lobe_samples, ..Default::default() };
-        let settings = Settings { reflections, timings: false, ..Settings::with_size(w, h) };
-        let mut r = Renderer::new(&g.device, &g.queue, settings).unwrap();
-        r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let estimate = r.read_terms(&g.device, &g.queue).unwrap().reflections.unwrap();
-        metrics::compare(&estimate, &truth.visible, &truth)
-    };
-    let errors = [1, 2, 4, 8, 16].map(error);
-    let rmse: Vec<f32> = errors.iter().map(|e| e.rmse).collect();
-    let mean = errors[0].truth_mean;
-    assert!(mean > 1.0, "the floor shows the highlight (truth mean {mean})");
-    let (lo, hi) = rmse.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &e| (lo.min(e), hi.max(e)));
-    assert!(hi <= 2.0 * mean, "RMSE {rmse:?} for 1 to 16 directions, truth mean {mean}");
-    assert!(hi <= 2.0 * lo, "RMSE {rmse:?} for 1 to 16 directions");
 }

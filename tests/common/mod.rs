@@ -272,6 +272,7 @@ pub fn emissive_quad(scene: &mut Scene, z: f32, xs: (f32, f32), emissive: Vec3) 
     scene.push_mesh(mesh).expect("indices in range");
 }
 
+#[cfg(feature = "truth")]
 /// The RMSE of `image` against `truth` over the visible pixels of the columns within
 /// `half_width` of the middle (`width` pixels a row).
 pub fn middle_rmse(
@@ -319,4 +320,55 @@ pub fn post_inputs(r: &Renderer) -> PostInputs {
         sharp: read4(r, r.sharp_buffer().expect("a post pass ran")),
         out: read4(r, r.hdr_buffer()),
     }
+}
+
+/// A black, double-sided mirror: reflectivity 1, roughness 0.
+pub fn mirror() -> deep_gbuffer::scene::Material {
+    deep_gbuffer::scene::Material {
+        name: "mirror".into(),
+        base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+        reflectivity: 1.0,
+        roughness: 0.0,
+        double_sided: true,
+        ..Default::default()
+    }
+}
+
+/// A mirror floor (material 0: reflectivity 1, black) and a wall of material `wall` standing on
+/// it at `wall_z`, `half_width` either side of x = 0 and `height` tall.
+pub fn mirror_before_a_wall(
+    wall: deep_gbuffer::scene::Material,
+    wall_z: f32,
+    half_width: f32,
+    height: f32,
+) -> Scene {
+    let mut scene = Scene::default();
+    scene.materials.push(mirror());
+    scene.materials.push(deep_gbuffer::scene::Material { double_sided: true, ..wall });
+    let side = 4.0 * half_width.max(-wall_z);
+    let floor = [
+        Vec3::new(-side, 0.0, -side),
+        Vec3::new(side, 0.0, -side),
+        Vec3::new(side, 0.0, side),
+        Vec3::new(-side, 0.0, side),
+    ];
+    let quad = [
+        Vec3::new(-half_width, 0.0, wall_z),
+        Vec3::new(half_width, 0.0, wall_z),
+        Vec3::new(half_width, height, wall_z),
+        Vec3::new(-half_width, height, wall_z),
+    ];
+    for (quad, material) in [(floor, 0), (quad, 1)] {
+        scene
+            .push_mesh(deep_gbuffer::scene::MeshData {
+                positions: &quad,
+                normals: &[],
+                uvs: &[],
+                indices: &[0, 1, 2, 0, 2, 3],
+                material,
+                ..deep_gbuffer::scene::MeshData::default()
+            })
+            .unwrap();
+    }
+    scene
 }
