@@ -185,8 +185,8 @@ enum TruthEffect {
     Ao,
     /// Diffuse indirect irradiance by path tracing (--bounces surfaces per path).
     Indirect,
-    /// Reflections: reflectivity times the mean radiance over the glossy lobe (the mirror
-    /// direction for roughness 0).
+    /// Reflections: reflectivity (tinted by the base colour as far as the surface is a metal)
+    /// times the mean radiance over the glossy lobe (the mirror direction for roughness 0).
     Reflections,
     /// The full image by path tracing, with the same lights, materials and sky.
     Full,

@@ -186,6 +186,44 @@ fn a_mirror_shows_the_wall_where_mirrored_rays_meet_it(
     );
 }
 
+/// A gold metal mirror (base colour (0.9, 0.6, 0.2), metallic 1, reflectivity 1) before a
+/// white glowing wall under a grey sky: what it reflects is tinted by its base colour, the F0
+/// of its specular BRDF, the wall's white shown as gold and the sky's grey as a darker gold.
+#[test]
+fn a_metal_mirror_tints_what_it_reflects() {
+    let glow = Material {
+        name: "glow".into(),
+        base_color: Vec4::ZERO.with_w(1.0),
+        emissive: Vec3::ONE,
+        ..Default::default()
+    };
+    let wall = (-1.0f32, 1.0f32, 1.0f32);
+    let mut scene = mirror_before_a_wall(glow, wall.0, wall.1, wall.2);
+    let gold = Vec3::new(0.9, 0.6, 0.2);
+    scene.materials[0].base_color = gold.extend(1.0);
+    scene.materials[0].metallic = 1.0;
+    scene.ambient = Vec3::splat(0.5);
+    let camera =
+        Camera::perspective(Vec3::new(0.0, 1.5, 3.0), Vec3::new(0.0, 0.0, -0.5), 50.0, 0.1);
+    let r = render(&scene, &camera, Settings { timings: false, ..Settings::with_size(64, 48) });
+    let refl = read4(&r.renderer, r.renderer.reflections_buffer().unwrap());
+    let (mut hits, mut misses) = (0, 0);
+    for ray in mirrored_rays(&r, &camera, wall) {
+        let v = refl[ray.p].truncate();
+        let expected = if ray.hits {
+            hits += 1;
+            gold
+        } else if ray.misses {
+            misses += 1;
+            0.5 * gold
+        } else {
+            continue;
+        };
+        assert!((v - expected).abs().max_element() < 1e-3, "pixel {}: {v} vs {expected}", ray.p);
+    }
+    assert!(hits > 50 && misses > 50, "rays meet the wall ({hits}) and the sky ({misses})");
+}
+
 #[test]
 fn a_mirror_shows_a_near_wall_where_mirrored_rays_meet_it() {
     let camera =

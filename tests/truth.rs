@@ -405,9 +405,15 @@ fn the_full_image_of_a_sunlit_plane_under_a_uniform_sky() {
 /// A mirror floor (black, reflectivity 0.7, roughness 0) in front of an emitting wall under a uniform sky:
 /// each mirror ray meets the wall (radiance Le) or leaves to the sky, so the truth is, without
 /// noise, 0.7 Le or 0.7 L_a, decided by where the closed-form mirrored ray crosses the wall's
-/// plane; pixels that do not reflect are not part of the image.
+/// plane; pixels that do not reflect are not part of the image. A gold metal floor (base colour
+/// (0.9, 0.6, 0.2), metallic 1) reflects the same tinted by its base colour, its specular F0.
 #[test]
 fn mirror_reflections_show_the_wall_or_the_sky() {
+    mirror_shows_the_wall_or_the_sky(Vec3::ZERO, 0.0);
+    mirror_shows_the_wall_or_the_sky(Vec3::new(0.9, 0.6, 0.2), 1.0);
+}
+
+fn mirror_shows_the_wall_or_the_sky(base: Vec3, metallic: f32) {
     let le = Vec3::new(2.0, 1.0, 0.5);
     let mut triangles = quad(0.0, 50.0, true).to_vec();
     // A wall at z = -3, 4 wide and 2 high, facing +z.
@@ -422,10 +428,12 @@ fn mirror_reflections_show_the_wall_or_the_sky() {
     let mut wall = scene.materials[0].clone();
     wall.base_color = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
     wall.emissive = le;
-    scene.materials[0].base_color = glam::Vec4::new(0.0, 0.0, 0.0, 1.0);
+    scene.materials[0].base_color = base.extend(1.0);
+    scene.materials[0].metallic = metallic;
     scene.materials[0].reflectivity = 0.7;
     scene.materials[0].roughness = 0.0;
     scene.materials.push(wall);
+    let tint = Vec3::ONE.lerp(base, metallic);
     for t in 2..4 {
         scene.triangle_materials[t] = 1;
     }
@@ -477,10 +485,10 @@ fn mirror_reflections_show_the_wall_or_the_sky() {
         let outside = s <= 0.0 || q.x.abs() > 2.0 + margin || q.y > 2.0 + margin;
         let expected = if inside {
             wall_pixels += 1;
-            0.7 * le
+            0.7 * tint * le
         } else if outside {
             sky_pixels += 1;
-            0.7 * scene.ambient
+            0.7 * tint * scene.ambient
         } else {
             continue; // within the margin of the wall's edge
         };
@@ -490,7 +498,7 @@ fn mirror_reflections_show_the_wall_or_the_sky() {
             "pixel {p}: {} vs {expected}",
             image.value[p]
         );
-        // The full image of a black mirror is its reflection.
+        // The full image of a black mirror, or of a metal one without lights, is its reflection.
         assert!((full.value[p] - expected).abs().max_element() <= 1e-5);
     }
     assert!(

@@ -265,6 +265,13 @@ fn layer_hit(q: u32, r: vec3<f32>, xy_in: vec2<f32>, z_in: f32, xy_out: vec2<f32
     return 2u;
 }
 
+// What sample s reflects of the radiance arriving along its mirror direction: its reflectivity,
+// tinted by its base colour as far as it is a metal (the F0 its specular BRDF takes: a gold
+// surface reflects gold, a dielectric's reflection keeps the light's colour).
+fn reflectance(s: GSample) -> vec3<f32> {
+    return s.reflectivity * mix(vec3<f32>(1.0), s.base_color, s.metallic);
+}
+
 // A GGX roughness widened by `blur` (the spread, as a GGX alpha, of the directions the
 // reflecting pixel gathers through the ray that met it) and by the turn of a curved surface's
 // normal over the patch those directions cover `t` away (`curvature`, radians per unit): a
@@ -572,7 +579,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
 #endif
 #endif
     if k == 1u {
-        return vec4<f32>(s.reflectivity * mirror, mirror_trust);
+        return vec4<f32>(reflectance(s) * mirror, mirror_trust);
     }
     // A glossy lobe: each direction the lobe reflects into is taken to travel as far as the
     // mirror ray did, and sees the surface the screen holds there when a layer's depth lies
@@ -615,7 +622,7 @@ fn trace(pixel: vec2<u32>) -> vec4<f32> {
         sum += colour;
         trust += confidence;
     }
-    return vec4<f32>(s.reflectivity * sum / f32(k), trust / f32(k));
+    return vec4<f32>(reflectance(s) * sum / f32(k), trust / f32(k));
 }
 
 @compute @workgroup_size(8, 8)
@@ -887,7 +894,7 @@ fn reflections_hidden(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
         }
     }
     let alpha = s.roughness * s.roughness;
-    reflections[q] = vec4<f32>(s.reflectivity * hidden_seen(hit, r, sqrt(alpha * alpha + 2.0 * spread)), 1.0);
+    reflections[q] = vec4<f32>(reflectance(s) * hidden_seen(hit, r, sqrt(alpha * alpha + 2.0 * spread)), 1.0);
 }
 #endif
 #endif

@@ -253,6 +253,13 @@ impl HitShading<'_> {
     }
 }
 
+/// As `reflectance`: what a surface reflects of the radiance arriving along its mirror
+/// direction, its reflectivity tinted by its base colour as far as it is a metal (the F0 of its
+/// specular BRDF). The ground truth's mirror term takes the same.
+pub fn reflectance(reflectivity: f32, base_color: Vec3, metallic: f32) -> Vec3 {
+    reflectivity * Vec3::ONE.lerp(base_color, metallic)
+}
+
 /// As `widened_roughness`: a GGX roughness widened by `blur` (the spread, as a GGX alpha, of the
 /// directions a reflecting pixel gathers through the ray that met the surface) and by the turn
 /// of a curved surface's normal over the patch those directions cover `t` away.
@@ -411,7 +418,8 @@ pub fn reflections(
                 mirror = mirror.lerp(seen, mirror_trust);
             }
             if k == 1 {
-                out[pi] = (s.reflectivity * mirror).extend(mirror_trust);
+                out[pi] = (reflectance(s.reflectivity, s.base_color, s.metallic) * mirror)
+                    .extend(mirror_trust);
                 continue;
             }
             // As the kernel: lobe directions travel as far as the mirror ray did.
@@ -451,7 +459,8 @@ pub fn reflections(
                 sum += colour;
                 trust += confidence;
             }
-            out[pi] = (s.reflectivity * sum / k as f32).extend(trust / k as f32);
+            let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
+            out[pi] = (tint * sum / k as f32).extend(trust / k as f32);
         }
     }
     if let (Some(scene), Some(shadows)) = (shading.follow, shading.shadows) {
@@ -688,6 +697,7 @@ impl Hidden<'_> {
         }
         let alpha = s.roughness * s.roughness;
         let blur = (alpha * alpha + 2.0 * spread).sqrt();
-        Some((s.reflectivity * self.seen(hit, r, blur)).extend(1.0))
+        let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
+        Some((tint * self.seen(hit, r, blur)).extend(1.0))
     }
 }

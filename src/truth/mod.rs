@@ -410,6 +410,12 @@ impl Surface {
             occlusion: s.occlusion,
         }
     }
+
+    /// What the surface reflects of the radiance along its glossy lobe
+    /// ([`reflectance`](crate::cpu::reflections::reflectance): a metal tints it).
+    fn reflectance(&self) -> Vec3 {
+        crate::cpu::reflections::reflectance(self.reflectivity, self.base_color, self.metallic)
+    }
 }
 
 /// What light reaches the scene: its lights, and the sky that rays leaving it see.
@@ -591,7 +597,7 @@ impl Tracer {
         }
         if s.reflectivity > 0.0 {
             let r = lobe(s.normal, v, s.roughness, rng);
-            out += s.reflectivity * self.radiance(scene, light, origin, r, depth - 1, rng);
+            out += s.reflectance() * self.radiance(scene, light, origin, r, depth - 1, rng);
         }
         out
     }
@@ -664,11 +670,15 @@ impl Tracer {
     }
 
     /// Reflections, the quantity the reflection pass estimates: at every pixel whose surface
-    /// reflects, its reflectivity times the mean radiance arriving over its glossy lobe,
+    /// reflects, its reflectance times the mean radiance arriving over its glossy lobe,
     ///
     /// ```text
-    /// R(X) = reflectivity * E[L(X, l)],   l = the reflection of v about a GGX visible normal
+    /// R(X) = reflectivity * mix(1, base colour, metallic) * E[L(X, l)],
+    /// l = the reflection of v about a GGX visible normal
     /// ```
+    ///
+    /// (a metal tints what it reflects by its base colour, the F0 of its specular BRDF:
+    /// [`reflectance`](crate::cpu::reflections::reflectance))
     ///
     /// (alpha = roughness^2, sampled as Heitz 2018, a direction below the surface mirrored above
     /// it: [`lobe_direction`]; the mirror direction `reflect(-v, n)` for roughness 0), where L is the sky's radiance (`environment`, else the scene's ambient) if the ray leaves
@@ -695,7 +705,8 @@ impl Tracer {
             let origin = point + s.normal * eps;
             Some(sample_mean(spp, || {
                 let r = lobe(s.normal, v, s.roughness, rng);
-                s.reflectivity * self.radiance(scene, &lighting, origin, r, bounces, rng)
+                crate::cpu::reflections::reflectance(s.reflectivity, s.base_color, s.metallic)
+                    * self.radiance(scene, &lighting, origin, r, bounces, rng)
             }))
         })
     }
