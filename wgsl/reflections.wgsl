@@ -18,11 +18,13 @@
 //   shows it, reflections left out (wgsl/shared/shade.wgsl: direct light, emission, and the
 //   diffuse albedo times the gathered irradiance and the ambient term dimmed by the
 //   obscurance), its direct light re-evaluated towards the point the ray left (the lights,
-//   past their shadow maps: shared/lit.wgsl). A ray that leaves the screen, the distance or
+//   past their shadow maps: shared/lit.wgsl) at its roughness widened by the share of the
+//   reflector's glossy lobe the ray stands for (widened_roughness). A ray that leaves the screen, the distance or
 //   the iteration budget sees the environment: the equirectangular map (src/environment.rs
 //   gives the mapping) when one is set, else the constant sky. Hits fade out near the screen
 //   edges; the confidence (alpha) is 1 for a hit far from the edges, 0 for the environment.
-//   Output: reflectivity * colour.
+//   Output: reflectance * colour (the reflectivity, tinted by the base colour as far as the
+//   surface is a metal).
 // reflections_hidden (FOLLOW, with SHADOWS): the mirror rays the march could not place, which it
 //   lists (`followed`, one thread each; reflections_hidden_args sizes the dispatch): those that
 //   found nothing on screen, ran into the side of a solid the camera does not see (layer 0's
