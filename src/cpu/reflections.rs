@@ -228,7 +228,6 @@ impl HitShading<'_> {
     /// As `seen_at`: what a ray along view-space direction `d` that hits `layer` at pixel q
     /// sees, its direct light re-evaluated towards the ray's origin `t` away, widened by the
     /// lobe's spread `blur` (`relit`).
-    #[allow(clippy::too_many_arguments)]
     fn seen(
         &self,
         f: &FrameUniform,
