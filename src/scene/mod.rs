@@ -131,7 +131,8 @@ pub struct Material {
     pub roughness: f32,
     /// Metalness in [0, 1].
     pub metallic: f32,
-    /// Mirror reflectivity in [0, 1] (how much a screen-space reflection contributes).
+    /// Mirror reflectivity in [0, 1] (how much a screen-space reflection contributes; a metal
+    /// tints what it reflects by its base colour as far as it is metallic).
     pub reflectivity: f32,
     /// Both faces are visible; otherwise back faces are culled.
     pub double_sided: bool,
