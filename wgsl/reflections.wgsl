@@ -293,31 +293,43 @@ fn layer_word(q: u32, layer: u32) -> GWord {
     return gbuffer[q * G_WORDS];
 }
 
-// The curvature (radians of normal per unit) of `layer`'s surface at pixel q, from its
-// neighbours on either side along each axis where both hold the same surface (within a tenth
-// of its depth); the larger of the two axes.
-fn layer_curvature(q: u32, layer: u32) -> f32 {
+// The change of `layer`'s normal across pixel q along `axis` (0: x, 1: y): its length and the
+// distance between the two neighbours' points, where both neighbours lie on screen and hold a
+// surface within a tenth of q's depth (the same surface); (0, 0) elsewhere.
+fn normal_change(q: u32, layer: u32, axis: u32) -> vec2<f32> {
     let d = gword_depth(layer_word(q, layer));
     let pixel = vec2<i32>(i32(q % frame.width), i32(q / frame.width));
+    let step = select(vec2<i32>(0, 1), vec2<i32>(1, 0), axis == 0u);
+    let a0 = pixel - step;
+    let a1 = pixel + step;
+    if any(a0 < vec2<i32>(0)) || a1.x >= i32(frame.width) || a1.y >= i32(frame.height) {
+        return vec2<f32>(0.0);
+    }
+    let w0 = layer_word(u32(a0.y) * frame.width + u32(a0.x), layer);
+    let w1 = layer_word(u32(a1.y) * frame.width + u32(a1.x), layer);
+    let d0 = gword_depth(w0);
+    let d1 = gword_depth(w1);
+    if !(d0 > 0.0 && d1 > 0.0 && abs(d0 - d) < 0.1 * d && abs(d1 - d) < 0.1 * d) {
+        return vec2<f32>(0.0);
+    }
+    let dn = length(gword_normal(w1) - gword_normal(w0));
+    if !(dn < 1e30) {
+        return vec2<f32>(0.0);
+    }
+    let p0 = view_position(frame, vec2<f32>(a0) + 0.5, d0);
+    let p1 = view_position(frame, vec2<f32>(a1) + 0.5, d1);
+    return vec2<f32>(dn, length(p1 - p0));
+}
+
+// The curvature (radians of normal per unit) of `layer`'s surface at pixel q: the larger of
+// the two axes' normal change over its distance.
+fn layer_curvature(q: u32, layer: u32) -> f32 {
     var curvature = 0.0;
     for (var axis = 0u; axis < 2u; axis++) {
-        let step = select(vec2<i32>(0, 1), vec2<i32>(1, 0), axis == 0u);
-        let a0 = pixel - step;
-        let a1 = pixel + step;
-        if all(a0 >= vec2<i32>(0)) && a1.x < i32(frame.width) && a1.y < i32(frame.height) {
-            let w0 = layer_word(u32(a0.y) * frame.width + u32(a0.x), layer);
-            let w1 = layer_word(u32(a1.y) * frame.width + u32(a1.x), layer);
-            let d0 = gword_depth(w0);
-            let d1 = gword_depth(w1);
-            if d0 > 0.0 && d1 > 0.0 && abs(d0 - d) < 0.1 * d && abs(d1 - d) < 0.1 * d {
-                let p0 = view_position(frame, vec2<f32>(a0) + 0.5, d0);
-                let p1 = view_position(frame, vec2<f32>(a1) + 0.5, d1);
-                let len = length(p1 - p0);
-                let c = length(gword_normal(w1) - gword_normal(w0)) / len;
-                if len > 0.0 && c < 1e30 {
-                    curvature = max(curvature, c);
-                }
-            }
+        let change = normal_change(q, layer, axis);
+        let c = change.x / change.y;
+        if change.y > 0.0 && c < 1e30 {
+            curvature = max(curvature, c);
         }
     }
     return curvature;
@@ -881,19 +893,8 @@ fn reflections_hidden(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invo
     // change of the normal across the two pixels either side, per axis.
     var spread = 0.0;
     for (var axis = 0u; axis < 2u; axis++) {
-        let step = select(vec2<i32>(0, 1), vec2<i32>(1, 0), axis == 0u);
-        let a0 = vec2<i32>(gid) - step;
-        let a1 = vec2<i32>(gid) + step;
-        if all(a0 >= vec2<i32>(0)) && a1.x < i32(frame.width) && a1.y < i32(frame.height) {
-            let s0 = sample_at(u32(a0.y) * frame.width + u32(a0.x));
-            let s1 = sample_at(u32(a1.y) * frame.width + u32(a1.x));
-            if s0.depth > 0.0 && s1.depth > 0.0 && abs(s0.depth - s1.depth) < 0.1 * s.depth {
-                let dn = 0.25 * length(s1.normal - s0.normal);
-                if dn < 1e30 {
-                    spread += dn * dn;
-                }
-            }
-        }
+        let dn = 0.25 * normal_change(q, 0u, axis).x;
+        spread += dn * dn;
     }
     let alpha = s.roughness * s.roughness;
     reflections[q] = vec4<f32>(reflectance(s) * hidden_seen(hit, r, sqrt(alpha * alpha + 2.0 * spread)), 1.0);

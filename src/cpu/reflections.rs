@@ -268,34 +268,37 @@ fn widened_roughness(roughness: f32, blur: f32, t: f32, curvature: f32) -> f32 {
     (a * a + widened * widened).sqrt().sqrt()
 }
 
-/// As `layer_curvature`: the curvature (radians of normal per unit) of a layer's surface at
-/// pixel q, from its neighbours either side along each axis that hold the same surface.
-fn layer_curvature(f: &FrameUniform, layer: &[GSample], q: usize) -> f32 {
+/// As `normal_change`: the change of a layer's normal across pixel q along `axis` (0: x, 1: y),
+/// its length and the distance between the two neighbours' points, where both neighbours lie
+/// on screen and hold a surface within a tenth of q's depth; (0, 0) elsewhere.
+fn normal_change(f: &FrameUniform, layer: &[GSample], q: usize, axis: u32) -> (f32, f32) {
     let d = layer[q].depth;
     let (x, y) = ((q as u32 % f.width) as i32, (q as u32 / f.width) as i32);
-    let mut curvature = 0.0f32;
-    for (sx, sy) in [(1i32, 0i32), (0, 1)] {
-        let (x0, y0, x1, y1) = (x - sx, y - sy, x + sx, y + sy);
-        if x0 < 0 || y0 < 0 || x1 >= f.width as i32 || y1 >= f.height as i32 {
-            continue;
-        }
-        let s0 = &layer[(y0 as u32 * f.width + x0 as u32) as usize];
-        let s1 = &layer[(y1 as u32 * f.width + x1 as u32) as usize];
-        if s0.depth > 0.0
-            && s1.depth > 0.0
-            && (s0.depth - d).abs() < 0.1 * d
-            && (s1.depth - d).abs() < 0.1 * d
-        {
-            let p0 = view_position(f, Vec2::new(x0 as f32, y0 as f32) + 0.5, s0.depth);
-            let p1 = view_position(f, Vec2::new(x1 as f32, y1 as f32) + 0.5, s1.depth);
-            let len = (p1 - p0).length();
-            let c = (s1.normal - s0.normal).length() / len;
-            if len > 0.0 && c < 1e30 {
-                curvature = curvature.max(c);
-            }
-        }
+    let (sx, sy) = if axis == 0 { (1, 0) } else { (0, 1) };
+    let (x0, y0, x1, y1) = (x - sx, y - sy, x + sx, y + sy);
+    if x0 < 0 || y0 < 0 || x1 >= f.width as i32 || y1 >= f.height as i32 {
+        return (0.0, 0.0);
     }
-    curvature
+    let s0 = &layer[(y0 as u32 * f.width + x0 as u32) as usize];
+    let s1 = &layer[(y1 as u32 * f.width + x1 as u32) as usize];
+    let same = |s: &GSample| s.depth > 0.0 && (s.depth - d).abs() < 0.1 * d;
+    let dn = (s1.normal - s0.normal).length();
+    if !(same(s0) && same(s1) && dn < 1e30) {
+        return (0.0, 0.0);
+    }
+    let p0 = view_position(f, Vec2::new(x0 as f32, y0 as f32) + 0.5, s0.depth);
+    let p1 = view_position(f, Vec2::new(x1 as f32, y1 as f32) + 0.5, s1.depth);
+    (dn, (p1 - p0).length())
+}
+
+/// As `layer_curvature`: the curvature (radians of normal per unit) of a layer's surface at
+/// pixel q, the larger of the two axes' normal change over its distance.
+fn layer_curvature(f: &FrameUniform, layer: &[GSample], q: usize) -> f32 {
+    (0..2).fold(0.0f32, |curvature, axis| {
+        let (dn, len) = normal_change(f, layer, q, axis);
+        let c = dn / len;
+        if len > 0.0 && c < 1e30 { curvature.max(c) } else { curvature }
+    })
 }
 
 /// A unit vector's orthonormal tangents (Duff et al. 2017), as `tangents`.
@@ -411,14 +414,14 @@ pub fn reflections(
                 1
             };
             let blur = if alpha > 0.0 { alpha / (k as f32).sqrt() } else { 0.0 };
+            let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
             if let Some((q, layer, xy)) = hit {
                 mirror_trust = edge_confidence(xy);
                 let seen = shading.seen(f, layers, (q, layer), r, (blur, went), ambient);
                 mirror = mirror.lerp(seen, mirror_trust);
             }
             if k == 1 {
-                out[pi] = (reflectance(s.reflectivity, s.base_color, s.metallic) * mirror)
-                    .extend(mirror_trust);
+                out[pi] = (tint * mirror).extend(mirror_trust);
                 continue;
             }
             // As the kernel: lobe directions travel as far as the mirror ray did.
@@ -458,7 +461,6 @@ pub fn reflections(
                 sum += colour;
                 trust += confidence;
             }
-            let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
             out[pi] = (tint * sum / k as f32).extend(trust / k as f32);
         }
     }
@@ -679,21 +681,9 @@ impl Hidden<'_> {
         if follow < 0.0 && self.faces_camera(hit.1, o + r * hit.0, o) {
             return None;
         }
-        let mut spread = 0.0f32;
-        for step in [(1i32, 0i32), (0, 1)] {
-            let (x0, y0) = (x as i32 - step.0, y as i32 - step.1);
-            let (x1, y1) = (x as i32 + step.0, y as i32 + step.1);
-            if x0 >= 0 && y0 >= 0 && x1 < f.width as i32 && y1 < f.height as i32 {
-                let s0 = &layer0[(y0 as u32 * f.width + x0 as u32) as usize];
-                let s1 = &layer0[(y1 as u32 * f.width + x1 as u32) as usize];
-                if s0.depth > 0.0 && s1.depth > 0.0 && (s0.depth - s1.depth).abs() < 0.1 * s.depth {
-                    let dn = 0.25 * (s1.normal - s0.normal).length();
-                    if dn < 1e30 {
-                        spread += dn * dn;
-                    }
-                }
-            }
-        }
+        // The pixel's own spread of normals: a quarter of their change across it, per axis.
+        let spread: f32 =
+            (0..2).map(|axis| (0.25 * normal_change(f, layer0, pi, axis).0).powi(2)).sum();
         let alpha = s.roughness * s.roughness;
         let blur = (alpha * alpha + 2.0 * spread).sqrt();
         let tint = reflectance(s.reflectivity, s.base_color, s.metallic);

@@ -21,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::cpu::frame::{mat_mul, view_position};
-use crate::cpu::reflections::lobe_direction;
+use crate::cpu::reflections::{lobe_direction, reflectance};
 use crate::environment::Environment;
 use crate::frame::CameraMatrices;
 use crate::frame::FrameUniform;
@@ -414,7 +414,7 @@ impl Surface {
     /// What the surface reflects of the radiance along its glossy lobe
     /// ([`reflectance`](crate::cpu::reflections::reflectance): a metal tints it).
     fn reflectance(&self) -> Vec3 {
-        crate::cpu::reflections::reflectance(self.reflectivity, self.base_color, self.metallic)
+        reflectance(self.reflectivity, self.base_color, self.metallic)
     }
 }
 
@@ -703,10 +703,10 @@ impl Tracer {
             }
             let v = towards_eye(&f, point);
             let origin = point + s.normal * eps;
+            let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
             Some(sample_mean(spp, || {
                 let r = lobe(s.normal, v, s.roughness, rng);
-                crate::cpu::reflections::reflectance(s.reflectivity, s.base_color, s.metallic)
-                    * self.radiance(scene, &lighting, origin, r, bounces, rng)
+                tint * self.radiance(scene, &lighting, origin, r, bounces, rng)
             }))
         })
     }

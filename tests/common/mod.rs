@@ -272,9 +272,9 @@ pub fn emissive_quad(scene: &mut Scene, z: f32, xs: (f32, f32), emissive: Vec3) 
     scene.push_mesh(mesh).expect("indices in range");
 }
 
-#[cfg(feature = "truth")]
 /// The RMSE of `image` against `truth` over the visible pixels of the columns within
 /// `half_width` of the middle (`width` pixels a row).
+#[cfg(feature = "truth")]
 pub fn middle_rmse(
     image: &[glam::Vec4],
     truth: &deep_gbuffer::truth::TruthImage,
