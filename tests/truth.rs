@@ -671,9 +671,11 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
 /// The sphere field under the sun: the ground beside a sphere sees its shadowed underside, while
 /// the camera sees its sunlit top. With the normal test the gather takes the far side's light for
 /// a surface facing away from the receiver (its emission and reflected indirect light: none
-/// here on a first frame), so the ground's indirect light stays near the truth's; without it the
-/// ground takes the sunlit tops' light (measured: 6.3x the truth's on the ground, 1.6x over the
-/// image; with the test 1.7x and 0.83x, RMSE 0.075 against 0.127).
+/// here on a first frame), and on a curved surface the light of the side the receiver sees
+/// (the rules for curved surfaces in `wgsl/radiosity.wgsl`), so the ground's indirect light
+/// stays near the truth's; without the test the ground takes the sunlit tops' light (measured:
+/// 6.4x the truth's on the ground, RMSE 0.129; with it 1.39x, RMSE 0.067; 1.80x, RMSE 0.068,
+/// before the rules for curved surfaces, which the bound of 1.6 on the ground tells apart).
 #[test]
 fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
     let g = gpu();
@@ -715,7 +717,7 @@ fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
         ratios.push((on_ground, error.rmse));
     }
     let (with, without) = (ratios[0], ratios[1]);
-    assert!(with.0 > 0.5 && with.0 < 2.0, "ground with the normal test: {} of the truth", with.0);
+    assert!(with.0 > 0.5 && with.0 < 1.6, "ground with the normal test: {} of the truth", with.0);
     assert!(without.0 > 3.0, "ground without the normal test: {} of the truth", without.0);
     assert!(with.1 < 0.8 * without.1, "RMSE {} with the test, {} without", with.1, without.1);
 }

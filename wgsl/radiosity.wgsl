@@ -297,11 +297,15 @@ fn sent(t: SourceTexel, layer: u32, c: vec3<f32>, at: vec2<f32>, z: f32) -> vec3
     if params.normal_test == 0u {
         return unpack_rgb9e5(t.radiance[layer]);
     }
-    let normal = oct_decode(unpack2x16snorm(t.normal[layer]));
+    let d = c - view_position(frame, at, z);
+    return sent_towards(t, layer, oct_decode(unpack2x16snorm(t.normal[layer])), d, length(d));
+}
+
+// As `sent`, with the surface's normal and d = c - its point (|d| = `reach`) at hand.
+fn sent_towards(t: SourceTexel, layer: u32, normal: vec3<f32>, d: vec3<f32>, reach: f32) -> vec3<f32> {
     // A surface in c's own plane (seen edge-on, or c's neighbour on a flat wall, where rounding
     // picks the sign) counts as facing it.
-    let d = c - view_position(frame, at, z);
-    if dot(d, normal) > -FACING_SLACK * length(d) {
+    if dot(d, normal) > -FACING_SLACK * reach {
         return unpack_rgb9e5(t.radiance[layer]);
     }
     return unpack_rgb9e5(t.hidden[layer]);
@@ -309,6 +313,69 @@ fn sent(t: SourceTexel, layer: u32, c: vec3<f32>, at: vec2<f32>, z: f32) -> vec3
 
 // How far (the cosine) a surface may turn away from a point and still count as facing it.
 const FACING_SLACK: f32 = 1e-3;
+
+// Curved surfaces (with the normal test). The camera sees one side of a curved surface, the
+// receiving point X another: the ground beside a sphere sees its shadowed underside, while the
+// steps find the sunlit side the camera sees, whose solid hides the directions in which X sees that
+// underside (the ground around a lone sphere, `builtin:grid-200`, read 3.3x the truth's first
+// bounce, the share of its hemisphere covered near the sphere's closed form). Two rules give those directions the light of the side X
+// sees rather than of the side the camera sees:
+// - along a side of a slice, a point that faces X less squarely than the point before it (the two
+//   joined as one surface: the earlier lies nearer the later than X does) on a surface that bends
+//   between them (their normals further apart than BEND_COS) sends what that earlier point sent: X
+//   sees, in the directions it hides first, the part of the surface that turns towards X (on a
+//   sphere, the side below the one the camera sees lit; in an engine's fins, the face of a fin
+//   whose back the camera sees);
+// - a point that starts a surface (joined to none before it), faces X at a grazing angle (cosine
+//   under GRAZING) and lies on a surface that bends away from X within X's distance (told by the
+//   next step's point: `grazing_light`) sends a blend from H towards B by its cosine over GRAZING:
+//   its solid hides the far side of a curved object, which X sees and the camera does not.
+// With them, at 160x120, that ground reads 2.1x, and the sphere field's 32nd frame 1.149 of the
+// ten-bounce truth (1.188 without; README, *Curved surfaces*). Reading the next texel along the
+// slice instead of waiting for the next step cost the gather 20% more on llvmpipe for figures
+// within 0.01; the rules cost it about 11%.
+const BEND_COS: f32 = 0.95;
+const GRAZING: f32 = 0.3;
+const BEND_REACH: f32 = 0.5;
+
+// The last layer-0 point that hid sectors on a side of a slice: what it sent, where it lies,
+// its normal and the cosine at which it faces the receiver (below -1: none yet).
+struct Sender {
+    light: vec3<f32>,
+    y: vec3<f32>,
+    n: vec3<f32>,
+    facing: f32,
+}
+
+// A layer-0 point that starts a surface and faces the receiver X at a grazing angle, whose light
+// waits for the next step's point to tell whether its surface bends away from X: B, H (packed),
+// the cosine at which it faces X, the sectors it hid first, where it lies and its normal.
+struct Grazing {
+    on: bool,
+    b: vec3<f32>,
+    h: u32,
+    facing: f32,
+    count: u32,
+    y: vec3<f32>,
+    n: vec3<f32>,
+}
+
+// What the grazing point g sends towards X (view point c), the next step along the slice finding
+// the layer-0 point y2 (normal n2; `found` false where it found none): a blend from H towards B
+// by its cosine over GRAZING where its surface bends away from X within X's distance (the next
+// point faces X less squarely: convex as seen from X, where a groove's floor turns towards X;
+// and the normal turns by more than BEND_REACH per |X - y| of the way between the two points,
+// the turn taken as the chord between the unit normals), else B.
+fn grazing_light(g: Grazing, c: vec3<f32>, found: bool, y2: vec3<f32>, n2: vec3<f32>) -> vec3<f32> {
+    if !found {
+        return g.b;
+    }
+    let away = dot(n2, c - y2) / max(length(c - y2), 1e-30) < g.facing;
+    if away && length(n2 - g.n) * length(c - g.y) > BEND_REACH * max(length(y2 - g.y), 1e-6) {
+        return mix(unpack_rgb9e5(g.h), g.b, max(g.facing, 0.0) / GRAZING);
+    }
+    return g.b;
+}
 
 // The `slices` gather at `pixel` (sample s of layer RECEIVER): irradiance and confidence.
 // `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
@@ -336,27 +403,64 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
             // first, over what the screen holds of it.
             let spacing = slice_spacing(pixel, sl, along, r_px, steps);
             let coarsest = mip_coarsest(spacing, params.levels);
+            var last = Sender(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), -2.0);
+            var grazing: Grazing;
+            grazing.on = false;
             for (var j = 0u; j < steps; j++) {
                 let h = spacing * (f32(j) + noise.y);
                 let step_level = mip_level(h, params.mip_offset, coarsest);
                 var tap: vec2<i32>;
-                if !slice_tap(pixel, sl, h, along, &tap) {
-                    continue;
+                var t: SourceTexel;
+                var at = vec2<f32>(0.0);
+                var z0 = 0.0;
+                if slice_tap(pixel, sl, h, along, &tap) {
+                    var q = 0u;
+                    at = mip_texel(tap, step_level, source_offset(step_level), &q);
+                    t = source[q];
+                    z0 = bitcast<f32>(t.depth.x);
                 }
-                var q = 0u;
-                let at = mip_texel(tap, step_level, source_offset(step_level), &q);
-                let t = source[q];
-                let z0 = bitcast<f32>(t.depth.x);
-                if !(z0 > 0.0) {
-                    continue;
-                }
+                let found = z0 > 0.0;
                 let z1 = bitcast<f32>(t.depth.y);
                 let backs = solid_backs(z0, z1, params.thickness);
                 var front2 = 0.0;
-                var bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);
+                var bits = 0u;
+                if found {
+                    bits = solid_sectors(sl, c, n, at, along, z0, backs.x, 0.0, params.radius, &front2);
+                }
+                var y = vec3<f32>(0.0);
+                var ny = vec3<f32>(0.0);
+                if found && params.normal_test != 0u && (grazing.on || bits != 0u) {
+                    y = view_position(frame, at, z0);
+                    ny = oct_decode(unpack2x16snorm(t.normal[0]));
+                }
+                if grazing.on {
+                    last.light = grazing_light(grazing, c, found, y, ny);
+                    sum += last.light * f32(grazing.count);
+                    grazing.on = false;
+                }
+                if !found {
+                    continue;
+                }
                 var first = countOneBits(bits & ~occupied);
-                if first > 0u {
-                    sum += sent(t, 0u, c, at, z0) * f32(first);
+                if bits != 0u && params.normal_test == 0u {
+                    sum += unpack_rgb9e5(t.radiance[0]) * f32(first);
+                } else if bits != 0u {
+                    let d = c - y;
+                    let reach = length(d);
+                    var light = sent_towards(t, 0u, ny, d, reach);
+                    // The rules for curved surfaces (above).
+                    var facing = dot(ny, d) / max(reach, 1e-30);
+                    let joined = last.facing >= -1.0 && dot(y - last.y, y - last.y) < reach * reach;
+                    if joined && dot(ny, last.n) < BEND_COS && last.facing > facing {
+                        light = last.light;
+                        facing = last.facing;
+                    } else if !joined && facing < GRAZING {
+                        grazing = Grazing(true, light, t.hidden[0], facing, first, y, ny);
+                    }
+                    last = Sender(light, y, ny, facing);
+                    if !grazing.on {
+                        sum += light * f32(first);
+                    }
                 }
                 occupied |= bits;
                 if z1 > z0 {
@@ -367,6 +471,10 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                     }
                     occupied |= bits;
                 }
+            }
+            // A grazing point with no step after it: nothing tells that its surface bends.
+            if grazing.on {
+                sum += grazing.b * f32(grazing.count);
             }
         }
         seen += sl.weight * sum / f32(SECTORS);

@@ -164,6 +164,48 @@ pub fn gather(
 /// `FACING_SLACK` of `wgsl/radiosity.wgsl`.
 const FACING_SLACK: f32 = 1e-3;
 
+/// `BEND_COS`, `GRAZING` and `BEND_REACH` of `wgsl/radiosity.wgsl` (curved surfaces).
+const BEND_COS: f32 = 0.95;
+const GRAZING: f32 = 0.3;
+const BEND_REACH: f32 = 0.5;
+
+/// As `Sender`: the last layer-0 point that hid sectors on a side of a slice, what it sent,
+/// where it lies, its normal and the cosine at which it faces the receiver.
+struct Sender {
+    light: Vec3,
+    y: Vec3,
+    n: Vec3,
+    facing: f32,
+}
+
+/// As `Grazing`: a layer-0 point that starts a surface and faces the receiver at a grazing
+/// angle, whose light waits for the next step's point.
+struct Grazing {
+    b: Vec3,
+    h: Vec3,
+    facing: f32,
+    count: u32,
+    y: Vec3,
+    n: Vec3,
+}
+
+impl Grazing {
+    /// As `grazing_light`: what it sends towards the receiver `c`, the next step finding the
+    /// layer-0 point and normal `next` (`None`: no point).
+    fn light(&self, c: Vec3, next: Option<(Vec3, Vec3)>) -> Vec3 {
+        let Some((y2, n2)) = next else {
+            return self.b;
+        };
+        let away = n2.dot(c - y2) / (c - y2).length().max(1e-30) < self.facing;
+        let turn = (n2 - self.n).length();
+        if away && turn * (c - self.y).length() > BEND_REACH * (y2 - self.y).length().max(1e-6) {
+            let s = self.facing.max(0.0) / GRAZING;
+            return self.h * (1.0 - s) + self.b * s;
+        }
+        self.b
+    }
+}
+
 /// What the gather reads.
 struct Gather<'a> {
     f: &'a FrameUniform,
@@ -185,16 +227,28 @@ impl Gather<'_> {
         if self.u.normal_test == 0 {
             return t.radiance(layer);
         }
-        let normal = t.normal(layer);
         let d = c - view_position(self.f, at, z);
-        if d.dot(normal) > -FACING_SLACK * d.length() { t.radiance(layer) } else { t.hidden(layer) }
+        self.sent_towards(t, layer, t.normal(layer), d, d.length())
+    }
+
+    /// As `sent_towards`: `sent` with the surface's normal and d = c - its point (|d| =
+    /// `reach`) at hand.
+    fn sent_towards(
+        &self,
+        t: &SourceTexel,
+        layer: usize,
+        normal: Vec3,
+        d: Vec3,
+        reach: f32,
+    ) -> Vec3 {
+        if d.dot(normal) > -FACING_SLACK * reach { t.radiance(layer) } else { t.hidden(layer) }
     }
 
     /// As `slices_gather`: the irradiance and confidence at pixel `(x, y)`.
-    fn slices(&self, (x, y): (u32, u32), noise_at: (u32, u32)) -> Vec4 {
+    fn slices(&self, (x, y_px): (u32, u32), noise_at: (u32, u32)) -> Vec4 {
         let (f, u) = (self.f, self.u);
-        let s = &self.layers[self.receiver][(y * f.width + x) as usize];
-        let c = view_position(f, Vec2::new(x as f32, y as f32) + 0.5, s.depth);
+        let s = &self.layers[self.receiver][(y_px * f.width + x) as usize];
+        let c = view_position(f, Vec2::new(x as f32, y_px as f32) + 0.5, s.depth);
         let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz().normalize();
         let r_px = u.radius * pixels_per_unit(f, s.depth);
         let slices = u.slices.max(1);
@@ -208,24 +262,64 @@ impl Gather<'_> {
             }
             let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
             for side in [1.0, -1.0] {
-                let spacing = sl.spacing(f, (x, y), side, r_px, steps);
+                let spacing = sl.spacing(f, (x, y_px), side, r_px, steps);
                 let coarsest = mip_coarsest(spacing, self.layout);
+                let mut last: Option<Sender> = None;
+                let mut grazing: Option<Grazing> = None;
                 for j in 0..steps {
                     let h = spacing * (j as f32 + noise.1);
                     let level = mip_level(h, u.mip_offset, coarsest);
-                    let Some(tap) = sl.tap(f, (x, y), h, side) else {
+                    let found = sl
+                        .tap(f, (x, y_px), h, side)
+                        .map(|tap| mip_texel(self.layout, tap, level))
+                        .map(|(q, at)| (&self.source[q], at))
+                        .filter(|(t, _)| t.depth(0) > 0.0);
+                    let point = found
+                        .filter(|_| u.normal_test != 0)
+                        .map(|(t, at)| (view_position(f, at, t.depth(0)), t.normal(0)));
+                    if let Some(g) = grazing.take() {
+                        let light = g.light(c, point);
+                        sum += light * g.count as f32;
+                        if let Some(l) = last.as_mut() {
+                            l.light = light;
+                        }
+                    }
+                    let Some((t, at)) = found else {
                         continue;
                     };
-                    let (q, at) = mip_texel(self.layout, tap, level);
-                    let t = &self.source[q];
-                    let z0 = t.depth(0);
-                    if z0.is_nan() || z0 <= 0.0 {
-                        continue;
-                    }
-                    let z1 = t.depth(1);
+                    let (z0, z1) = (t.depth(0), t.depth(1));
                     let (back0, back1) = solid_backs(z0, z1, u.thickness);
                     let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
-                    sum += self.sent(t, 0, c, at, z0) * (bits & !occupied).count_ones() as f32;
+                    let first = (bits & !occupied).count_ones();
+                    match point {
+                        _ if bits == 0 => {}
+                        None => sum += t.radiance(0) * first as f32,
+                        Some((y, ny)) => {
+                            // The rules for curved surfaces.
+                            let d = c - y;
+                            let reach = d.length();
+                            let mut light = self.sent_towards(t, 0, ny, d, reach);
+                            let mut facing = ny.dot(d) / reach.max(1e-30);
+                            let joined = last
+                                .as_ref()
+                                .filter(|l| (y - l.y).length_squared() < reach * reach);
+                            match joined {
+                                Some(l) if ny.dot(l.n) < BEND_COS && l.facing > facing => {
+                                    (light, facing) = (l.light, l.facing);
+                                }
+                                None if facing < GRAZING => {
+                                    let (b, h) = (light, t.hidden(0));
+                                    grazing =
+                                        Some(Grazing { b, h, facing, count: first, y, n: ny });
+                                }
+                                _ => {}
+                            }
+                            last = Some(Sender { light, y, n: ny, facing });
+                            if grazing.is_none() {
+                                sum += light * first as f32;
+                            }
+                        }
+                    }
                     occupied |= bits;
                     if z1 > z0 {
                         let (bits, _) =
@@ -233,6 +327,10 @@ impl Gather<'_> {
                         sum += self.sent(t, 1, c, at, z1) * (bits & !occupied).count_ones() as f32;
                         occupied |= bits;
                     }
+                }
+                // A grazing point with no step after it: nothing tells that its surface bends.
+                if let Some(g) = grazing {
+                    sum += g.b * g.count as f32;
                 }
             }
             seen += sl.weight * sum / SECTORS as f32;
