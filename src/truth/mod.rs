@@ -678,7 +678,7 @@ impl Tracer {
     /// ```
     ///
     /// (a metal tints what it reflects by its base colour, the F0 of its specular BRDF:
-    /// [`reflectance`](crate::cpu::reflections::reflectance))
+    /// [`reflectance`])
     ///
     /// (alpha = roughness^2, sampled as Heitz 2018, a direction below the surface mirrored above
     /// it: [`lobe_direction`]; the mirror direction `reflect(-v, n)` for roughness 0), where L is the sky's radiance (`environment`, else the scene's ambient) if the ray leaves
