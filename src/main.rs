@@ -370,7 +370,8 @@ struct RadiosityArgs {
     damping: Option<f32>,
     /// Take a surface's outgoing light only where it faces the gathering point; a slices
     /// gather takes what a surface facing away sends from its far side, its emission and the
-    /// indirect light it reflects (see `RadiositySettings::normal_test`) [default: on].
+    /// indirect light it reflects, and from a curved surface the side the point sees (see
+    /// `RadiositySettings::normal_test`) [default: on].
     #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
     radiosity_normal_test: Option<bool>,
     /// Add the light of the surfaces neither layer holds, from each shadow-casting light's

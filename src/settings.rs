@@ -486,7 +486,11 @@ pub struct RadiositySettings {
     /// emission and the indirect light it reflects (none on the first frame, and none from
     /// layer 1 without its gather, [`layer1_samples`](Self::layer1_samples)), not its direct
     /// light (a sphere lit from above, seen from the ground beside it, shows the ground its dark
-    /// side). Off, every surface sends its visible side's light both ways.
+    /// side). With it, `slices` also lets a curved surface send the side the gathering point
+    /// sees: a point facing it less squarely than the point before it on one bending surface
+    /// sends that point's light, and a point starting a surface at a grazing angle, on a surface
+    /// that bends away, blends towards its far side's light (`wgsl/radiosity.wgsl`, *Curved
+    /// surfaces*). Off, every surface sends its visible side's light both ways.
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,
