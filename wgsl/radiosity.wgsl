@@ -442,22 +442,24 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                     continue;
                 }
                 var first = countOneBits(bits & ~occupied);
-                if bits != 0u && params.normal_test == 0u {
-                    sum += unpack_rgb9e5(t.radiance[0]) * f32(first);
-                } else if bits != 0u {
-                    let d = c - y;
-                    let reach = length(d);
-                    var light = sent_towards(t, 0u, ny, d, reach);
-                    // The rules for curved surfaces (above).
-                    var facing = dot(ny, d) / max(reach, 1e-30);
-                    let joined = last.facing >= -1.0 && dot(y - last.y, y - last.y) < reach * reach;
-                    if joined && dot(ny, last.n) < BEND_COS && last.facing > facing {
-                        light = last.light;
-                        facing = last.facing;
-                    } else if !joined && facing < GRAZING {
-                        grazing = Grazing(true, light, t.hidden[0], facing, first, y, ny);
+                if bits != 0u {
+                    var light = unpack_rgb9e5(t.radiance[0]);
+                    if params.normal_test != 0u {
+                        let d = c - y;
+                        let reach = length(d);
+                        light = sent_towards(t, 0u, ny, d, reach);
+                        // The rules for curved surfaces (above).
+                        var facing = dot(ny, d) / max(reach, 1e-30);
+                        let joined = last.facing >= -1.0 && dot(y - last.y, y - last.y) < reach * reach;
+                        if joined && dot(ny, last.n) < BEND_COS && last.facing > facing {
+                            light = last.light;
+                            facing = last.facing;
+                        } else if !joined && facing < GRAZING {
+                            grazing = Grazing(true, light, t.hidden[0], facing, first, y, ny);
+                        }
+                        last = Sender(light, y, ny, facing);
                     }
-                    last = Sender(light, y, ny, facing);
+                    // A grazing point's light waits for the next step.
                     if !grazing.on {
                         sum += light * f32(first);
                     }

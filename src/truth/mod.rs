@@ -410,12 +410,6 @@ impl Surface {
             occlusion: s.occlusion,
         }
     }
-
-    /// What the surface reflects of the radiance along its glossy lobe
-    /// ([`reflectance`](crate::cpu::reflections::reflectance): a metal tints it).
-    fn reflectance(&self) -> Vec3 {
-        reflectance(self.reflectivity, self.base_color, self.metallic)
-    }
 }
 
 /// What light reaches the scene: its lights, and the sky that rays leaving it see.
@@ -597,7 +591,8 @@ impl Tracer {
         }
         if s.reflectivity > 0.0 {
             let r = lobe(s.normal, v, s.roughness, rng);
-            out += s.reflectance() * self.radiance(scene, light, origin, r, depth - 1, rng);
+            let tint = reflectance(s.reflectivity, s.base_color, s.metallic);
+            out += tint * self.radiance(scene, light, origin, r, depth - 1, rng);
         }
         out
     }
