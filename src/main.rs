@@ -105,6 +105,9 @@ struct SweepArgs {
     /// Layer-1 gather tap counts to sweep (0: none).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_layer1_samples))]
     radiosity_layer1_samples: Vec<u32>,
+    /// Weights of the radiosity steps' extrapolation to sweep (0: none).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_extrapolation))]
+    radiosity_extrapolation: Vec<f32>,
     /// Obscurance temporal filter weights to sweep (0: no filter).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_alpha))]
     ao_alpha: Vec<f32>,
@@ -356,6 +359,10 @@ struct RadiosityArgs {
     /// the light they receive in the next frame's bounce, 0 to 256 (0: none) [default: 8].
     #[arg(long)]
     radiosity_layer1_samples: Option<u32>,
+    /// Weight of the slices gather's extrapolation from every other step, 0 to 2 (0: none)
+    /// [default: 0.6].
+    #[arg(long)]
+    radiosity_extrapolation: Option<f32>,
     /// A radiosity tap h pixels away reads level floor(log2 h) - this of the gather source,
     /// 0 to 8 [default: 4].
     #[arg(long)]
@@ -389,6 +396,7 @@ impl RadiosityArgs {
         r.thickness = self.radiosity_thickness.unwrap_or(r.thickness);
         r.slices = self.radiosity_slices.unwrap_or(r.slices);
         r.layer1_samples = self.radiosity_layer1_samples.unwrap_or(r.layer1_samples);
+        r.extrapolation = self.radiosity_extrapolation.unwrap_or(r.extrapolation);
         r.history_slices = self.radiosity_history_slices.unwrap_or(r.history_slices);
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
@@ -949,6 +957,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_samples: args.radiosity_samples,
         radiosity_slices: args.radiosity_slices,
         radiosity_layer1_samples: args.radiosity_layer1_samples,
+        radiosity_extrapolation: args.radiosity_extrapolation,
         radiosity_history_slices: args.radiosity_history_slices,
         layers: args.layers,
         precision: args.precision,

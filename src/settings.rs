@@ -517,6 +517,13 @@ pub struct RadiositySettings {
     /// alone, and a bounce that lands behind layer 0 stops there). 0 to 256; runs only where
     /// layer 1 is drawn.
     pub layer1_samples: u32,
+    /// Weight k of the steps' extrapolation (`slices`): each slice's irradiance and coverage are
+    /// `E + k (E - E_half)` and `c + k (c - c_half)`, the halves what every other step alone
+    /// finds, as the obscurance's ([`AoSettings::extrapolation`]). Steps spaced apart leave
+    /// open the directions of what stands between them (an engine's fins between two steps
+    /// that land beyond them), so the light found grows with the steps; 0.6 takes the
+    /// obscurance's order of convergence. 0: the plain estimate. 0 to 2.
+    pub extrapolation: f32,
     /// Add the light of the surfaces that neither layer holds, as each shadow-casting light's
     /// reflective shadow map sees them (`wgsl/offscreen.wgsl`): the ceiling around a light above
     /// the screen's top, a side turned to the light and away from the camera. Runs with the
@@ -619,6 +626,7 @@ impl Default for RadiositySettings {
             mip_offset: 4,
             downsample: 1,
             layer1_samples: 8,
+            extrapolation: 0.6,
             offscreen: true,
             history_slices: 0,
         }
@@ -702,6 +710,12 @@ impl RadiositySettings {
             return Err(Error::setting(
                 "radiosity.history_slices",
                 format!("{} (must be 0 to 16)", self.history_slices),
+            ));
+        }
+        if !(self.extrapolation.is_finite() && (0.0..=2.0).contains(&self.extrapolation)) {
+            return Err(Error::setting(
+                "radiosity.extrapolation",
+                format!("{} (must be 0 to 2)", self.extrapolation),
             ));
         }
         if self.layer1_samples > 256 {

@@ -59,6 +59,8 @@ pub struct Knobs {
     /// Taps per layer-1 point of the layer-1 gather ([`RadiositySettings::layer1_samples`];
     /// 0: none).
     pub radiosity_layer1_samples: u32,
+    /// Weight of the slices gather's extrapolation ([`RadiositySettings::extrapolation`]).
+    pub radiosity_extrapolation: f32,
     /// Radiosity slices a frame with the temporal history gathers
     /// ([`RadiositySettings::history_slices`]; 0: all).
     pub radiosity_history_slices: u32,
@@ -140,6 +142,7 @@ impl Knobs {
                 samples: self.radiosity_samples,
                 slices: self.radiosity_slices,
                 layer1_samples: self.radiosity_layer1_samples,
+                extrapolation: self.radiosity_extrapolation,
                 history_slices: self.radiosity_history_slices,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
@@ -205,6 +208,8 @@ pub struct Grid {
     pub radiosity_slices: Vec<u32>,
     /// Layer-1 gather taps.
     pub radiosity_layer1_samples: Vec<u32>,
+    /// Weights of the radiosity steps' extrapolation.
+    pub radiosity_extrapolation: Vec<f32>,
     /// Radiosity slices a frame with the history gathers.
     pub radiosity_history_slices: Vec<u32>,
     /// Layer counts.
@@ -260,6 +265,7 @@ impl Default for Grid {
             radiosity_samples: vec![16, 32, 64],
             radiosity_slices: vec![settings.radiosity.slices],
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
+            radiosity_extrapolation: vec![settings.radiosity.extrapolation],
             radiosity_history_slices: vec![settings.radiosity.history_slices],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
@@ -309,6 +315,7 @@ impl Grid {
             radiosity_samples: settings.radiosity.samples,
             radiosity_slices: settings.radiosity.slices,
             radiosity_layer1_samples: settings.radiosity.layer1_samples,
+            radiosity_extrapolation: settings.radiosity.extrapolation,
             radiosity_history_slices: settings.radiosity.history_slices,
             layers: 2,
             precision: settings.precision,
@@ -344,6 +351,7 @@ impl Grid {
         let k = times(k, &self.shutter, |k, v| k.shutter = v);
         let k = times(k, &self.radiosity_radius, |k, v| k.radiosity_radius = v);
         let k = times(k, &self.radiosity_layer1_samples, |k, v| k.radiosity_layer1_samples = v);
+        let k = times(k, &self.radiosity_extrapolation, |k, v| k.radiosity_extrapolation = v);
         let k = times(k, &self.radiosity_history_slices, |k, v| k.radiosity_history_slices = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
@@ -659,7 +667,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,ao_blur_radius,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,ao_blur_radius,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_extrapolation,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -682,7 +690,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -692,6 +700,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_samples,
             k.radiosity_slices,
             k.radiosity_layer1_samples,
+            k.radiosity_extrapolation,
             k.radiosity_history_slices,
             k.layers,
             k.precision,
@@ -761,7 +770,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 23] = [
+    let optional: [Column; 24] = [
         ("AO estimator", |k| k.ao_estimator.name().to_string()),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("AO history weight", |k| k.ao_alpha.to_string()),
@@ -772,6 +781,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("position", |k| k.position.name().to_string()),
         ("radiosity radius", |k| k.radiosity_radius.to_string()),
         ("layer-1 radiosity taps", |k| k.radiosity_layer1_samples.to_string()),
+        ("radiosity extrapolation", |k| k.radiosity_extrapolation.to_string()),
         ("radiosity slices with history", |k| k.radiosity_history_slices.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),

@@ -165,6 +165,10 @@ fn bad_input_gives_one_line_and_a_failure_code() {
         ),
         (vec!["render".into(), "--radiosity-slices".into(), "17".into()], "radiosity.slices"),
         (vec!["truth".into(), "--radiosity-thickness=0".into()], "radiosity.thickness"),
+        (
+            vec!["render".into(), "--radiosity-extrapolation".into(), "2.5".into()],
+            "radiosity.extrapolation",
+        ),
         (vec!["render".into(), "--reflection-lobe-samples".into(), "0".into()], "lobe_samples"),
         (vec!["truth".into(), "--reflection-thickness=-1".into()], "reflections.thickness"),
         (vec!["truth".into(), "--turn".into(), "NaN".into()], "turn"),

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{corner, corner_obscurance, corner_surface, gpu, mirror_before_a_wall, soup};
+use common::{corner, corner_obscurance, corner_surface, fixture, gpu, mirror_before_a_wall, soup};
 use deep_gbuffer::truth::{Shot, Tracer, TruthImage, metrics};
 use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
@@ -673,9 +673,11 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
 /// a surface facing away from the receiver (its emission and reflected indirect light: none
 /// here on a first frame), and on a curved surface the light of the side the receiver sees
 /// (the rules for curved surfaces in `wgsl/radiosity.wgsl`), so the ground's indirect light
-/// stays near the truth's; without the test the ground takes the sunlit tops' light (measured:
-/// 6.4x the truth's on the ground, RMSE 0.129; with it 1.39x, RMSE 0.067; 1.80x, RMSE 0.068,
-/// before the rules for curved surfaces, which the bound of 1.6 on the ground tells apart).
+/// stays near the truth's; without the test the ground takes the sunlit tops' light. Measured
+/// on the ground at the defaults: 5.1x the truth's without the test (RMSE 0.124), 1.65x with
+/// it (RMSE 0.068), 2.56x with the test but without the rules for curved surfaces, which the
+/// bound of 2 tells apart. (Before the steps crowded towards the point and were extrapolated,
+/// which count more of each sphere's solid: 6.4x, 1.39x and 1.80x, under a bound of 1.6.)
 #[test]
 fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
     let g = gpu();
@@ -717,9 +719,56 @@ fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
         ratios.push((on_ground, error.rmse));
     }
     let (with, without) = (ratios[0], ratios[1]);
-    assert!(with.0 > 0.5 && with.0 < 1.6, "ground with the normal test: {} of the truth", with.0);
+    assert!(with.0 > 0.5 && with.0 < 2.0, "ground with the normal test: {} of the truth", with.0);
     assert!(without.0 > 3.0, "ground without the normal test: {} of the truth", without.0);
     assert!(with.1 < 0.8 * without.1, "RMSE {} with the test, {} without", with.1, without.1);
+}
+
+/// 2CylinderEngine under the sun: its light lies in the grooves between fins, which the
+/// `slices` gather's steps jump over when spaced evenly (it found half the truth's one-bounce
+/// light). Steps crowded towards the point and the extrapolation from every other step find
+/// most of it: the first frame's mean within 0.75-1.25 of the truth's, and the extrapolation
+/// brings the mean and the median per-pixel error nearer the truth than the plain estimate
+/// with the same steps (at 80x60, 128 rays, when written: 0.812 and -0.36 against 0.676 and
+/// -0.50; with the steps spread evenly, 0.55 at 160x120).
+#[test]
+fn the_radiosity_finds_the_light_between_an_engines_fins() {
+    let g = gpu();
+    let mut scene = Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap();
+    scene.ensure_lights();
+    let camera = scene.camera_or_default();
+    let (w, h) = (80u32, 60u32);
+    let truth = Tracer::new(&scene)
+        .unwrap()
+        .indirect(&scene, &Shot { camera: &camera, size: (w, h), spp: 128, seed: 1 }, 1, &|| ())
+        .unwrap();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let scale = Settings::scale_for(scene.extent());
+    let error = |extrapolation: f32| {
+        let mut settings = Settings { timings: false, ..Settings::with_size(w, h) }.scaled(scale);
+        settings.radiosity.extrapolation = extrapolation;
+        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        let terms = renderer.read_terms(&g.device, &g.queue).unwrap();
+        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
+        let seen: Vec<bool> = layer0
+            .samples
+            .iter()
+            .enumerate()
+            .map(|(p, s)| s.depth > 0.0 && truth.visible[p])
+            .collect();
+        metrics::compare(&terms.indirect.unwrap(), &seen, &truth)
+    };
+    let (plain, extrapolated) = (error(0.0), error(Settings::default().radiosity.extrapolation));
+    let ratio = |e: &metrics::ErrorStats| e.estimate_mean / e.truth_mean;
+    eprintln!("plain {:.3} {plain:?}", ratio(&plain));
+    eprintln!("extrapolated {:.3} {extrapolated:?}", ratio(&extrapolated));
+    assert!((0.75..1.25).contains(&ratio(&extrapolated)), "{extrapolated:?}");
+    assert!(ratio(&plain) < ratio(&extrapolated), "{plain:?} -> {extrapolated:?}");
+    assert!(
+        extrapolated.median_relative.abs() < plain.median_relative.abs(),
+        "{plain:?} -> {extrapolated:?}"
+    );
 }
 
 /// A glossy floor (roughness 0.3) before a polished metal wall (roughness 0.15) lit by a low

@@ -194,17 +194,6 @@ fn hide_behind(h: ptr<function, Hidden>, bits: u32, falloff: f32) {
     (*h).occupied |= bits;
 }
 
-// How far (pixels) step j of `steps` lies along a side whose steps would lie `spacing` apart if
-// spread evenly: at t^1.5 of the side's reach, t = (j + jitter) / steps, so that they crowd
-// towards the point, where the falloff and the cosine weigh most and a groove narrower than
-// the even spacing would fall between two steps. (An even spread left the engine's fin grooves
-// open: RMSE 0.0948 against 0.0825 at 160x120; t^2 thinned the far steps until the Cornell
-// box's creases at a distance lost occlusion: bias +0.013.) src/cpu/ao.rs has the same.
-fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
-    let t = (f32(j) + jitter) / f32(steps);
-    return spacing * f32(steps) * t * sqrt(t);
-}
-
 // `noise_at`: the texel whose slice turns the pixel takes (itself at full resolution; its texel
 // at a lower one, so that every 4x4 block of texels holds the 16 turns).
 fn slice_visibility(pixel: vec2<u32>, noise_at: vec2<u32>, c: vec3<f32>, n: vec3<f32>, r_px: f32) -> f32 {

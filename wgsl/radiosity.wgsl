@@ -46,7 +46,13 @@
 //     E_seen = (pi / S) sum_slices |n_p| W_total / SECTORS sum_sectors B
 //   over the share c = (1 / S) sum_slices |n_p| W_total / SECTORS (sectors hidden) of the
 //   cosine-weighted hemisphere, and writes E_seen and c: the directions no surface covers are
-//   left to the ambient term. The spiral turns every frame (jitter), and so do the slices.
+//   left to the ambient term. The steps crowd towards X as the obscurance's do (t^1.5 of the
+//   reach, shared/slices.wgsl's step_distance), and each slice's E_seen and c are extrapolated
+//   from what every other step alone finds (`extrapolation`, k): E + k (E - E_half). Steps
+//   spaced apart leave open the directions of what stands between them (the fins of an engine
+//   between two steps that land beyond them), so both grow with the steps; the extrapolation
+//   removes the first order of that (README, *Steps crowded towards the point*). The spiral
+//   turns every frame (jitter), and so do the slices.
 // radiosity_gather with RECEIVER = 1 (`radiosity.layer1`, `layer1_samples` taps): the same
 //   gather at layer 1's points, so that a surface the camera does not see passes on the light
 //   it receives: without it a bounce that lands behind layer 0 stops there (the Cornell box's
@@ -107,7 +113,8 @@ struct Radiosity {
     mip_offset: u32,
     // Taps per layer-1 point of the layer-1 gather (RECEIVER = 1).
     layer1_samples: u32,
-    _pad0: u32,
+    // Weight of the steps' extrapolation (SLICES).
+    extrapolation: f32,
     _pad1: u32,
     _pad2: u32,
     offsets: array<vec4<u32>, 2>,
@@ -356,6 +363,8 @@ struct Grazing {
     h: u32,
     facing: f32,
     count: u32,
+    // The sectors it hid first among every other step's (the extrapolation's half).
+    count_half: u32,
     y: vec3<f32>,
     n: vec3<f32>,
 }
@@ -394,8 +403,11 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
         if !(sl.weight > 0.0) {
             continue;
         }
+        // Every step's sectors and light, and every other step's (j even) for the extrapolation.
         var occupied = 0u;
         var sum = vec3<f32>(0.0);
+        var occupied_half = 0u;
+        var sum_half = vec3<f32>(0.0);
         // The two sides hold opposite halves of the arc: their order does not matter.
         for (var side = 0u; side < 2u; side++) {
             let along = select(1.0, -1.0, side == 1u);
@@ -407,7 +419,8 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
             var grazing: Grazing;
             grazing.on = false;
             for (var j = 0u; j < steps; j++) {
-                let h = spacing * (f32(j) + noise.y);
+                let h = step_distance(spacing, j, steps, noise.y);
+                let even = (j & 1u) == 0u;
                 let step_level = mip_level(h, params.mip_offset, coarsest);
                 var tap: vec2<i32>;
                 var t: SourceTexel;
@@ -436,12 +449,14 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                 if grazing.on {
                     last.light = grazing_light(grazing, c, found, y, ny);
                     sum += last.light * f32(grazing.count);
+                    sum_half += last.light * f32(grazing.count_half);
                     grazing.on = false;
                 }
                 if !found {
                     continue;
                 }
                 var first = countOneBits(bits & ~occupied);
+                var first_half = select(0u, countOneBits(bits & ~occupied_half), even);
                 if bits != 0u {
                     var light = unpack_rgb9e5(t.radiance[0]);
                     if params.normal_test != 0u {
@@ -455,32 +470,43 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                             light = last.light;
                             facing = last.facing;
                         } else if !joined && facing < GRAZING {
-                            grazing = Grazing(true, light, t.hidden[0], facing, first, y, ny);
+                            grazing = Grazing(true, light, t.hidden[0], facing, first, first_half, y, ny);
                         }
                         last = Sender(light, y, ny, facing);
                     }
                     // A grazing point's light waits for the next step.
                     if !grazing.on {
                         sum += light * f32(first);
+                        sum_half += light * f32(first_half);
                     }
                 }
                 occupied |= bits;
+                occupied_half |= select(0u, bits, even);
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, 0.0, params.radius, &front2);
                     first = countOneBits(bits & ~occupied);
-                    if first > 0u {
-                        sum += sent(t, 1u, c, at, z1) * f32(first);
+                    first_half = select(0u, countOneBits(bits & ~occupied_half), even);
+                    if first + first_half > 0u {
+                        let light = sent(t, 1u, c, at, z1);
+                        sum += light * f32(first);
+                        sum_half += light * f32(first_half);
                     }
                     occupied |= bits;
+                    occupied_half |= select(0u, bits, even);
                 }
             }
             // A grazing point with no step after it: nothing tells that its surface bends.
             if grazing.on {
                 sum += grazing.b * f32(grazing.count);
+                sum_half += grazing.b * f32(grazing.count_half);
             }
         }
-        seen += sl.weight * sum / f32(SECTORS);
-        covered += sl.weight * f32(countOneBits(occupied)) / f32(SECTORS);
+        // Richardson's extrapolation in the steps a side, as the obscurance's.
+        let k = params.extrapolation;
+        let hidden = f32(countOneBits(occupied));
+        let hidden_half = f32(countOneBits(occupied_half));
+        seen += sl.weight * max(sum + k * (sum - sum_half), vec3<f32>(0.0)) / f32(SECTORS);
+        covered += sl.weight * max(hidden + k * (hidden - hidden_half), 0.0) / f32(SECTORS);
     }
     return vec4<f32>(PI_R * seen / f32(slices), min(covered / f32(slices), 1.0));
 }

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel, rotated_grid};
-use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs};
+use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs, step_distance};
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap_turned};
 use crate::frame::{FrameUniform, PyramidLayout, RadiosityUniform, SourceTexel};
 use crate::gbuffer::GSample;
@@ -185,8 +185,24 @@ struct Grazing {
     h: Vec3,
     facing: f32,
     count: u32,
+    count_half: u32,
     y: Vec3,
     n: Vec3,
+}
+
+/// The sectors a slice's steps have hidden and the light they sent: every step's, or every
+/// other step's for the extrapolation.
+#[derive(Default)]
+struct Gathered {
+    occupied: u32,
+    sum: Vec3,
+}
+
+impl Gathered {
+    /// How many of `bits` nothing hid before.
+    fn first(&self, bits: u32) -> u32 {
+        (bits & !self.occupied).count_ones()
+    }
 }
 
 impl Grazing {
@@ -260,14 +276,15 @@ impl Gather<'_> {
             if sl.weight.is_nan() || sl.weight <= 0.0 {
                 continue;
             }
-            let (mut occupied, mut sum) = (0u32, Vec3::ZERO);
+            let (mut every, mut half) = (Gathered::default(), Gathered::default());
             for side in [1.0, -1.0] {
                 let spacing = sl.spacing(f, (x, y_px), side, r_px, steps);
                 let coarsest = mip_coarsest(spacing, self.layout);
                 let mut last: Option<Sender> = None;
                 let mut grazing: Option<Grazing> = None;
                 for j in 0..steps {
-                    let h = spacing * (j as f32 + noise.1);
+                    let h = step_distance(spacing, j, steps, noise.1);
+                    let even = j % 2 == 0;
                     let level = mip_level(h, u.mip_offset, coarsest);
                     let found = sl
                         .tap(f, (x, y_px), h, side)
@@ -279,7 +296,8 @@ impl Gather<'_> {
                         .map(|(t, at)| (view_position(f, at, t.depth(0)), t.normal(0)));
                     if let Some(g) = grazing.take() {
                         let light = g.light(c, point);
-                        sum += light * g.count as f32;
+                        every.sum += light * g.count as f32;
+                        half.sum += light * g.count_half as f32;
                         if let Some(l) = last.as_mut() {
                             l.light = light;
                         }
@@ -290,10 +308,14 @@ impl Gather<'_> {
                     let (z0, z1) = (t.depth(0), t.depth(1));
                     let (back0, back1) = solid_backs(z0, z1, u.thickness);
                     let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
-                    let first = (bits & !occupied).count_ones();
+                    let first = every.first(bits);
+                    let first_half = if even { half.first(bits) } else { 0 };
                     match point {
                         _ if bits == 0 => {}
-                        None => sum += t.radiance(0) * first as f32,
+                        None => {
+                            every.sum += t.radiance(0) * first as f32;
+                            half.sum += t.radiance(0) * first_half as f32;
+                        }
                         Some((y, ny)) => {
                             // The rules for curved surfaces.
                             let d = c - y;
@@ -309,32 +331,54 @@ impl Gather<'_> {
                                 }
                                 None if facing < GRAZING => {
                                     let (b, h) = (light, t.hidden(0));
-                                    grazing =
-                                        Some(Grazing { b, h, facing, count: first, y, n: ny });
+                                    grazing = Some(Grazing {
+                                        b,
+                                        h,
+                                        facing,
+                                        count: first,
+                                        count_half: first_half,
+                                        y,
+                                        n: ny,
+                                    });
                                 }
                                 _ => {}
                             }
                             last = Some(Sender { light, y, n: ny, facing });
                             if grazing.is_none() {
-                                sum += light * first as f32;
+                                every.sum += light * first as f32;
+                                half.sum += light * first_half as f32;
                             }
                         }
                     }
-                    occupied |= bits;
+                    every.occupied |= bits;
+                    if even {
+                        half.occupied |= bits;
+                    }
                     if z1 > z0 {
                         let (bits, _) =
                             sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
-                        sum += self.sent(t, 1, c, at, z1) * (bits & !occupied).count_ones() as f32;
-                        occupied |= bits;
+                        let light = self.sent(t, 1, c, at, z1);
+                        every.sum += light * every.first(bits) as f32;
+                        every.occupied |= bits;
+                        if even {
+                            half.sum += light * half.first(bits) as f32;
+                            half.occupied |= bits;
+                        }
                     }
                 }
                 // A grazing point with no step after it: nothing tells that its surface bends.
                 if let Some(g) = grazing {
-                    sum += g.b * g.count as f32;
+                    every.sum += g.b * g.count as f32;
+                    half.sum += g.b * g.count_half as f32;
                 }
             }
-            seen += sl.weight * sum / SECTORS as f32;
-            covered += sl.weight * occupied.count_ones() as f32 / SECTORS as f32;
+            // Richardson's extrapolation in the steps a side.
+            let k = u.extrapolation;
+            let (hidden, hidden_half) =
+                (every.occupied.count_ones() as f32, half.occupied.count_ones() as f32);
+            seen += sl.weight * (every.sum + k * (every.sum - half.sum)).max(Vec3::ZERO)
+                / SECTORS as f32;
+            covered += sl.weight * (hidden + k * (hidden - hidden_half)).max(0.0) / SECTORS as f32;
         }
         (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
     }

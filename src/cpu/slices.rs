@@ -42,6 +42,13 @@ fn segment_distance(c: Vec3, y: Vec3, back: Vec3, endless: bool) -> f32 {
     (y + d * t - c).length()
 }
 
+/// As `step_distance`: step j of `steps` along a side whose even spacing is `spacing`, at
+/// t^1.5 of the side's reach (t = (j + jitter) / steps), crowded towards the point.
+pub fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
+    let t = (j as f32 + jitter) / steps as f32;
+    spacing * steps as f32 * t * t.sqrt()
+}
+
 /// As `solid_backs`: where the solids of a step's two layers end (0: without end).
 pub fn solid_backs(z0: f32, z1: f32, thickness: f32) -> (f32, f32) {
     if thickness > 0.0 {
@@ -222,5 +229,27 @@ mod tests {
             assert_ne!(bits, 0, "lowered by {lower} the point still stands above the wall");
             assert_eq!(front2, own, "lowered by {lower}");
         }
+    }
+
+    /// The steps stay in order within the side's reach, crowd towards the point (each gap at
+    /// least the one before it) and reach it as the jitter approaches 1; an even spread would
+    /// put step j at (j + jitter) spacings.
+    #[test]
+    fn steps_crowd_towards_the_point_within_the_reach() {
+        let (spacing, steps) = (3.0f32, 8u32);
+        for jitter in [0.0f32, 0.25, 0.5, 0.999] {
+            let h: Vec<f32> =
+                (0..steps).map(|j| step_distance(spacing, j, steps, jitter)).collect();
+            assert!(h[0] >= 0.0 && h[steps as usize - 1] <= spacing * steps as f32);
+            for w in h.windows(3) {
+                assert!(w[1] - w[0] <= w[2] - w[1] + 1e-5, "{h:?}");
+            }
+            // The first step lies nearer than an even spread puts it (past the very start).
+            if jitter > 0.0 {
+                assert!(h[0] < spacing * jitter, "{h:?}");
+            }
+        }
+        let last = step_distance(spacing, steps - 1, steps, 0.999_999);
+        assert!((last - spacing * steps as f32).abs() < 1e-3, "{last}");
     }
 }

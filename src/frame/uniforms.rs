@@ -147,7 +147,9 @@ pub struct RadiosityUniform {
     pub mip_offset: u32,
     /// [`RadiositySettings::layer1_samples`].
     pub layer1_samples: u32,
-    pub _pad: [u32; 3],
+    /// [`RadiositySettings::extrapolation`].
+    pub extrapolation: f32,
+    pub _pad: [u32; 2],
     /// Level offsets in the gather source (up to 8).
     pub offsets: [[u32; 4]; 2],
 }
@@ -174,6 +176,7 @@ mirrored!(
         levels,
         mip_offset,
         layer1_samples,
+        extrapolation,
         offsets
     ]
 );
@@ -211,7 +214,8 @@ impl RadiosityUniform {
             levels: layout.levels.len().min(8) as u32,
             mip_offset: s.mip_offset,
             layer1_samples,
-            _pad: [0; 3],
+            extrapolation: s.extrapolation,
+            _pad: [0; 2],
             offsets: level_offsets(layout),
         }
     }

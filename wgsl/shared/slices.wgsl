@@ -73,6 +73,19 @@ fn slice_spacing(pixel: vec2<u32>, sl: Slice, side: f32, r_px: f32, steps: u32) 
     return min(r_px, screen_exit(frame, vec2<f32>(pixel) + 0.5, sl.dir * side)) / f32(steps);
 }
 
+// How far (pixels) step j of `steps` lies along a side whose steps would lie `spacing` apart if
+// spread evenly: at t^1.5 of the side's reach, t = (j + jitter) / steps, so that they crowd
+// towards the point, where the falloff (the obscurance's) and the cosine weigh most and a groove
+// narrower than the even spacing would fall between two steps. Both slice estimators place
+// their steps so. (For the obscurance an even spread left the
+// engine's fin grooves open: RMSE 0.0948 against 0.0825 at 160x120; t^2 thinned the far steps
+// until the Cornell box's creases at a distance lost occlusion: bias +0.013. For the radiosity,
+// README, *Steps crowded towards the point*.)
+fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
+    let t = (f32(j) + jitter) / f32(steps);
+    return spacing * f32(steps) * t * sqrt(t);
+}
+
 // Slice k of `count` at the view-space point c (normal n) with the pixel's noise.
 fn slice_at(k: u32, count: u32, noise: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> Slice {
     var sl: Slice;
