@@ -4,6 +4,7 @@
 mod common;
 
 use common::{corner, corner_obscurance, corner_surface, fixture, gpu, mirror_before_a_wall, soup};
+use deep_gbuffer::gbuffer::GSample;
 use deep_gbuffer::truth::{Shot, Tracer, TruthImage, metrics};
 use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
@@ -668,6 +669,51 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
     assert!(close * 100 >= compared * 98, "{close} of {compared} pixels within 2%");
 }
 
+/// A scene under its lights from its own camera at 80x60: the one-bounce truth (128 rays) and
+/// the GPU's first frame under settings a test changes, its indirect light and the layer-0
+/// samples with the pixels both see.
+struct FirstBounce {
+    scene: Scene,
+    camera: Camera,
+    truth: TruthImage,
+    buffers: SceneBuffers,
+}
+
+struct Gathered {
+    indirect: Vec<Vec3>,
+    samples: Vec<GSample>,
+    seen: Vec<bool>,
+}
+
+impl FirstBounce {
+    const SIZE: (u32, u32) = (80, 60);
+
+    fn new(mut scene: Scene) -> Self {
+        scene.ensure_lights();
+        let camera = scene.camera_or_default();
+        let shot = Shot { camera: &camera, size: Self::SIZE, spp: 128, seed: 1 };
+        let truth = Tracer::new(&scene).unwrap().indirect(&scene, &shot, 1, &|| ()).unwrap();
+        let buffers = SceneBuffers::upload(&gpu().device, &scene).unwrap();
+        FirstBounce { scene, camera, truth, buffers }
+    }
+
+    fn gather(&self, change: impl Fn(&mut Settings)) -> Gathered {
+        let g = gpu();
+        let (w, h) = Self::SIZE;
+        let scale = Settings::scale_for(self.scene.extent());
+        let mut settings = Settings { timings: false, ..Settings::with_size(w, h) }.scaled(scale);
+        change(&mut settings);
+        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
+        renderer.render(&g.device, &g.queue, &self.buffers, &self.camera).unwrap();
+        let terms = renderer.read_terms(&g.device, &g.queue).unwrap();
+        let samples = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap().samples;
+        let seen = (samples.iter().enumerate())
+            .map(|(p, s)| s.depth > 0.0 && self.truth.visible[p])
+            .collect();
+        Gathered { indirect: terms.indirect.unwrap(), samples, seen }
+    }
+}
+
 /// The sphere field under the sun: the ground beside a sphere sees its shadowed underside, while
 /// the camera sees its sunlit top. With the normal test the gather takes the far side's light for
 /// a surface facing away from the receiver (its emission and reflected indirect light: none
@@ -680,26 +726,8 @@ fn gpu_direct_light_matches_the_zero_bounce_truth() {
 /// which count more of each sphere's solid: 6.4x, 1.39x and 1.80x, under a bound of 1.6.)
 #[test]
 fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
-    let g = gpu();
-    let mut scene = Scene::from_spec("builtin:grid-20000").unwrap();
-    scene.ensure_lights();
-    let camera = scene.camera_or_default();
-    let (w, h) = (80u32, 60u32);
-    let truth = Tracer::new(&scene)
-        .unwrap()
-        .indirect(&scene, &Shot { camera: &camera, size: (w, h), spp: 128, seed: 1 }, 1, &|| ())
-        .unwrap();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
-    let scale = Settings::scale_for(scene.extent());
-    let gathered = |normal_test: bool| {
-        let mut settings = Settings { timings: false, ..Settings::with_size(w, h) }.scaled(scale);
-        settings.radiosity.normal_test = normal_test;
-        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
-        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let terms = renderer.read_terms(&g.device, &g.queue).unwrap();
-        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-        (terms.indirect.unwrap(), layer0.samples)
-    };
+    let field = FirstBounce::new(Scene::from_spec("builtin:grid-20000").unwrap());
+    let truth = &field.truth;
     let mean = |v: &[Vec3], mask: &[bool]| {
         let n = mask.iter().filter(|m| **m).count();
         assert!(n > 100, "{n} pixels");
@@ -708,13 +736,12 @@ fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
     };
     let mut ratios = Vec::new();
     for normal_test in [true, false] {
-        let (indirect, samples) = gathered(normal_test);
-        let seen: Vec<bool> =
-            samples.iter().enumerate().map(|(p, s)| s.depth > 0.0 && truth.visible[p]).collect();
+        let Gathered { indirect, samples, seen } =
+            field.gather(|s| s.radiosity.normal_test = normal_test);
         let ground: Vec<bool> =
             samples.iter().zip(&seen).map(|(s, v)| *v && s.normal.y > 0.99).collect();
         let on_ground = mean(&indirect, &ground) / mean(&truth.value, &ground);
-        let error = metrics::compare(&indirect, &seen, &truth);
+        let error = metrics::compare(&indirect, &seen, truth);
         eprintln!("normal test {normal_test}: ground {on_ground:.3} of the truth, {error:?}");
         ratios.push((on_ground, error.rmse));
     }
@@ -733,31 +760,10 @@ fn the_ground_beside_sunlit_spheres_does_not_see_their_lit_side() {
 /// -0.50; with the steps spread evenly, 0.55 at 160x120).
 #[test]
 fn the_radiosity_finds_the_light_between_an_engines_fins() {
-    let g = gpu();
-    let mut scene = Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap();
-    scene.ensure_lights();
-    let camera = scene.camera_or_default();
-    let (w, h) = (80u32, 60u32);
-    let truth = Tracer::new(&scene)
-        .unwrap()
-        .indirect(&scene, &Shot { camera: &camera, size: (w, h), spp: 128, seed: 1 }, 1, &|| ())
-        .unwrap();
-    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
-    let scale = Settings::scale_for(scene.extent());
+    let engine = FirstBounce::new(Scene::load(&fixture("engine/2CylinderEngine.gltf")).unwrap());
     let error = |extrapolation: f32| {
-        let mut settings = Settings { timings: false, ..Settings::with_size(w, h) }.scaled(scale);
-        settings.radiosity.extrapolation = extrapolation;
-        let mut renderer = Renderer::new(&g.device, &g.queue, settings).unwrap();
-        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        let terms = renderer.read_terms(&g.device, &g.queue).unwrap();
-        let layer0 = renderer.read_gbuffer(&g.device, &g.queue, 0).unwrap();
-        let seen: Vec<bool> = layer0
-            .samples
-            .iter()
-            .enumerate()
-            .map(|(p, s)| s.depth > 0.0 && truth.visible[p])
-            .collect();
-        metrics::compare(&terms.indirect.unwrap(), &seen, &truth)
+        let g = engine.gather(|s| s.radiosity.extrapolation = extrapolation);
+        metrics::compare(&g.indirect, &g.seen, &engine.truth)
     };
     let (plain, extrapolated) = (error(0.0), error(Settings::default().radiosity.extrapolation));
     let ratio = |e: &metrics::ErrorStats| e.estimate_mean / e.truth_mean;
