@@ -35,6 +35,10 @@ fn first_frame_matches_cpu_reference() {
         estimator: RadiosityEstimator::Spiral,
         ..Default::default()
     });
+    // The slices' plain sum and the strongest extrapolation from every other step.
+    for extrapolation in [0.0, 2.0] {
+        first_frame_against_cpu(RadiositySettings { extrapolation, ..Default::default() });
+    }
     // Every tap beyond a pixel reads a coarser level of the gather source.
     for estimator in [RadiosityEstimator::Slices, RadiosityEstimator::Spiral] {
         first_frame_against_cpu(RadiositySettings {
