@@ -4,9 +4,8 @@
 mod common;
 
 use common::{corner, corner_obscurance, corner_surface, fixture, gpu, mirror_before_a_wall, soup};
-use deep_gbuffer::gbuffer::GSample;
 use deep_gbuffer::truth::{Shot, Tracer, TruthImage, metrics};
-use deep_gbuffer::{AoSettings, Camera, Renderer, Scene, SceneBuffers, Settings};
+use deep_gbuffer::{AoSettings, Camera, GSample, Renderer, Scene, SceneBuffers, Settings};
 use glam::Vec3;
 
 fn quad(y: f32, size: f32, up: bool) -> [[Vec3; 3]; 2] {

@@ -190,21 +190,6 @@ struct Grazing {
     n: Vec3,
 }
 
-/// The sectors a slice's steps have hidden and the light they sent: every step's, or every
-/// other step's for the extrapolation.
-#[derive(Default)]
-struct Gathered {
-    occupied: u32,
-    sum: Vec3,
-}
-
-impl Gathered {
-    /// How many of `bits` nothing hid before.
-    fn first(&self, bits: u32) -> u32 {
-        (bits & !self.occupied).count_ones()
-    }
-}
-
 impl Grazing {
     /// As `grazing_light`: what it sends towards the receiver `c`, the next step finding the
     /// layer-0 point and normal `next` (`None`: no point).
@@ -219,6 +204,21 @@ impl Grazing {
             return self.h * (1.0 - s) + self.b * s;
         }
         self.b
+    }
+}
+
+/// As `Gathered`: the sectors a slice's steps have hidden and the light they sent, every
+/// step's or every other step's (the extrapolation's half).
+#[derive(Default)]
+struct Gathered {
+    occupied: u32,
+    sum: Vec3,
+}
+
+impl Gathered {
+    /// As `first_hidden`: how many of `bits` nothing hid before.
+    fn first(&self, bits: u32) -> u32 {
+        (bits & !self.occupied).count_ones()
     }
 }
 
