@@ -586,6 +586,12 @@ struct RenderArgs {
     /// most 64 frames; else 1].
     #[arg(long)]
     frames: Option<u32>,
+    /// Frames rendered after the radiosity settles (without --frames), each averaged in: the
+    /// temporal filter keeps the mean of the frames since (`Renderer::settle`), so the
+    /// gather's noise falls as one over the square root of their count (0: stop when it
+    /// settles).
+    #[arg(long, default_value_t = DEFAULT_AVERAGE, conflicts_with = "frames")]
+    average: u32,
     /// Degrees the camera orbits about the target (around the up axis) over all frames: the
     /// first frame at 0, the last at this angle (needs --frames).
     #[arg(long, default_value_t = 0.0, requires = "frames")]
@@ -1132,6 +1138,32 @@ fn info(adapter: &Option<String>) -> Result<()> {
 const SETTLE_MAX_FRAMES: u32 = 64;
 /// Frames between two looks at the radiosity while it settles.
 const SETTLE_STEP: u32 = 4;
+/// Frames `render` averages after the radiosity settles, unless told otherwise.
+const DEFAULT_AVERAGE: u32 = 32;
+
+/// Renders `frames` more frames of the still `camera` after the radiosity settled, the
+/// temporal filter keeping their mean ([`Renderer::settle`]).
+fn average_settled(
+    renderer: &mut Renderer,
+    gpu: &Gpu,
+    buffers: &SceneBuffers,
+    camera: &Camera,
+    frames: u32,
+) -> Result<()> {
+    renderer.settle();
+    let bar = Progress::new(u64::from(frames), "averaged frames".into());
+    for _ in 0..frames {
+        renderer.render(&gpu.device, &gpu.queue, buffers, camera)?;
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
+        bar.inc();
+    }
+    bar.finish();
+    eprintln!("note: averaged {frames} more frames of the settled view (--average sets how many)");
+    Ok(())
+}
+
 /// The radiosity has settled when its mean irradiance changed by at most this fraction over
 /// the last `SETTLE_STEP` frames.
 const SETTLE_CHANGE: f64 = 0.005;
@@ -1276,6 +1308,9 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
                     "note: the radiosity {how} after {} frames (--frames sets a count)",
                     i + 1
                 );
+                if settled && args.average > 0 {
+                    average_settled(&mut renderer, &gpu, &buffers, &camera, args.average)?;
+                }
                 break;
             }
             last_mean = Some(mean);

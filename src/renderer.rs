@@ -319,6 +319,9 @@ pub struct Renderer {
     /// radiosity's filter averages longer as it grows
     /// ([`RadiositySettings::history_weight`](crate::RadiositySettings::history_weight)).
     still_frames: u32,
+    /// The still frame after which the host said the radiosity settled
+    /// ([`settle`](Renderer::settle)); `None` once the view moves.
+    settled_at: Option<u32>,
 }
 
 /// What a frame's [`PassId::same_when_still`] passes wrote depends on: a later frame with the
@@ -491,6 +494,7 @@ impl Renderer {
             still: None,
             redraw: false,
             still_frames: 0,
+            settled_at: None,
             settings,
         })
     }
@@ -571,6 +575,31 @@ impl Renderer {
     pub fn reset_history(&mut self) {
         self.history = None;
         self.still = None;
+        self.settled_at = None;
+    }
+
+    /// Tells the renderer that the radiosity's bounces have settled under the still view of the
+    /// last frame (the host measured it: `deep-gbuffer render` waits until the mean irradiance
+    /// changes by less than 0.5% over four frames). From the next frame that shows the same view
+    /// the radiosity's temporal filter keeps the mean of the frames since, as it would after
+    /// [`RadiositySettings::settle_frames`](crate::RadiositySettings::settle_frames) still frames
+    /// (a bound for any scene, 227 with the defaults): the gather's noise, which the turned
+    /// slices make different every frame, then falls as one over the square root of the frames,
+    /// where the exponential filter keeps it at a fixed share of one frame's. A frame whose view
+    /// moves, or [`reset_history`](Self::reset_history), forgets it.
+    pub fn settle(&mut self) {
+        self.settled_at = Some(self.still_frames);
+    }
+
+    /// The still frames the radiosity's filter weighs by: past [`settle`](Self::settle), as
+    /// many past `settle_frames` as have stood still since.
+    fn radiosity_still(&self) -> u32 {
+        match self.settled_at {
+            Some(at) if self.still_frames > at => {
+                self.settings.radiosity.settle_frames().saturating_add(self.still_frames - at)
+            }
+            _ => self.still_frames,
+        }
     }
 
     /// Tells the renderer that the scene's geometry or materials changed in place (the host
@@ -758,6 +787,9 @@ impl Renderer {
         } else {
             0
         };
+        if self.still_frames == 0 {
+            self.settled_at = None;
+        }
         // Set again once the frame is recorded: a frame that stops on an error keeps nothing.
         self.still = None;
         self.redraw = false;
@@ -848,6 +880,7 @@ impl Renderer {
                 FrameUniform::new(camera, m, current, w, h, s.dz, counts)
             }
         });
+        let radiosity_still = self.radiosity_still();
         let st = &mut self.stages;
         let kept = plan.reused.iter().any(PassId::is_gbuffer);
         // The largest target the rasterizer draws: the image or a shadow-map face.
@@ -879,7 +912,7 @@ impl Renderer {
             // The reflective shadow maps' faces the off-screen light sums (none without it).
             let offscreen =
                 st.shadows.as_ref().and_then(|s| s.rsm_inputs(plan)).map_or(0, |r| r.count);
-            radiosity.prepare(device, queue, s, (history, self.still_frames), plan, offscreen);
+            radiosity.prepare(device, queue, s, (history, radiosity_still), plan, offscreen);
         }
         if plan.runs(Effect::Reflections) {
             let reflections =

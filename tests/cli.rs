@@ -242,7 +242,8 @@ fn plan_alone_progress_and_a_quiet_runtime_dir() {
 }
 
 /// Without `--frames`, a still camera renders until the radiosity settles, and says after how
-/// many frames; `--frames 1` renders one; a scene without radiosity renders one.
+/// many frames, then averages `--average` frames more (32 unless told); `--frames 1` renders
+/// one; a scene without radiosity renders one.
 #[test]
 fn render_settles_the_radiosity_unless_told_a_frame_count() {
     let dir = out_dir("settle");
@@ -263,6 +264,16 @@ fn render_settles_the_radiosity_unless_told_a_frame_count() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{settled}"));
     assert!((8..=64).contains(&frames) && frames.is_multiple_of(4), "{settled}");
+    // Then 32 frames more, each averaged in; `--average` sets how many.
+    assert!(settled.contains("note: averaged 32 more frames of the settled view"), "{settled}");
+    let two = run(&["builtin:cornell", "--average", "2"]);
+    assert!(two.contains("note: averaged 2 more frames"), "{two}");
+    assert!(!run(&["builtin:cornell", "--average", "0"]).contains("averaged"));
+    let both = cli()
+        .args(["render", "builtin:cornell", "--size", "24x18", "--frames", "3", "--average", "2"])
+        .output()
+        .unwrap();
+    assert!(!both.status.success(), "--average applies after the radiosity settles only");
     assert!(!run(&["builtin:cornell", "--frames", "1"]).contains("radiosity"));
     let plain = run(&["builtin:cornell", "--effects", "ao,direct,shadows"]);
     assert!(!plain.contains("radiosity") && !plain.contains("frames:"), "{plain}");

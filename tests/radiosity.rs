@@ -631,3 +631,63 @@ fn a_still_view_stops_flickering() {
     eprintln!("after a move: {before_settling}");
     assert!(before_settling > 0.5 * exponential, "{before_settling} against {exponential}");
 }
+
+/// A host that has measured the bounces settle (`Renderer::settle`, as `deep-gbuffer render`
+/// does) lets the filter average from then on, without waiting for the bound of
+/// `settle_frames`; a move forgets it.
+#[test]
+fn a_view_the_host_calls_settled_averages_from_then_on() {
+    let g = gpu();
+    let (camera, buffers) = cornell_uploaded();
+    let frames = |renderer: &mut Renderer, camera: &Camera, n: usize| -> Vec<f32> {
+        let mut last = read4(renderer, renderer.radiosity_buffers().unwrap().filtered);
+        (0..n)
+            .map(|_| {
+                renderer.render(&g.device, &g.queue, &buffers, camera).unwrap();
+                let now = read4(renderer, renderer.radiosity_buffers().unwrap().filtered);
+                let change =
+                    now.iter().zip(&last).map(|(a, b)| (*a - *b).truncate().abs().element_sum());
+                let mean = change.sum::<f32>() / now.len() as f32;
+                last = now;
+                mean
+            })
+            .collect()
+    };
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+
+    let mut settled = Renderer::new(&g.device, &g.queue, settings(32, 24)).unwrap();
+    let mut plain = Renderer::new(&g.device, &g.queue, settings(32, 24)).unwrap();
+    for r in [&mut settled, &mut plain] {
+        r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    }
+    let exponential = mean(&frames(&mut plain, &camera, 60)[40..]);
+    frames(&mut settled, &camera, 20);
+    settled.settle();
+    let averaged = mean(&frames(&mut settled, &camera, 60)[50..]);
+    eprintln!("mean change a frame: {exponential} forgetting, {averaged} 50 frames after settle");
+    assert!(exponential > 0.0, "the turned slices change the estimate");
+    assert!(averaged < 0.3 * exponential, "{averaged} against {exponential}");
+
+    // Settled and then moved: the filter forgets as a renderer never told does, bit for bit.
+    let mut told = Renderer::new(&g.device, &g.queue, settings(32, 24)).unwrap();
+    let mut untold = Renderer::new(&g.device, &g.queue, settings(32, 24)).unwrap();
+    for r in [&mut told, &mut untold] {
+        for _ in 0..6 {
+            r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        }
+    }
+    told.settle();
+    let moved = Camera { eye: camera.eye + glam::Vec3::new(0.05, 0.0, 0.0), ..camera.clone() };
+    for r in [&mut told, &mut untold] {
+        for _ in 0..6 {
+            r.render(&g.device, &g.queue, &buffers, &moved).unwrap();
+        }
+    }
+    let a = read4(&told, told.radiosity_buffers().unwrap().filtered);
+    let b = read4(&untold, untold.radiosity_buffers().unwrap().filtered);
+    assert!(
+        a.iter()
+            .zip(&b)
+            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+    );
+}
