@@ -246,6 +246,10 @@ struct TruthArgs {
     /// Frames the GPU renders before --compare reads its estimate (temporal multi-bounce).
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// Frames more of the last frame's view after --frames, the radiosity's filter keeping
+    /// their mean (`Renderer::settle`, as `render` does once the radiosity settles).
+    #[arg(long, default_value_t = 0)]
+    average: u32,
     /// The GPU estimate's accuracy preset (with --compare), as `render --preset` takes it;
     /// explicit options override it.
     #[arg(long, value_enum)]
@@ -842,6 +846,9 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
                 renderer.geometry_changed();
             }
             renderer.render(&gpu.device, &gpu.queue, &buffers, &at)?;
+        }
+        if args.average > 0 {
+            average_settled(&mut renderer, &gpu, &buffers, &camera, args.average)?;
         }
         let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
         let (estimate, effect, what) = match args.effect {

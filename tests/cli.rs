@@ -339,6 +339,23 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     assert_ne!(with(&["--preset", "high"], "high.exr"), estimate);
     let overridden = ["--preset", "high", "--ao-samples", "32", "--ao-slices", "2"];
     assert_eq!(with(&[&overridden[..], &["--ao-blur-radius", "4"]].concat(), "back.exr"), estimate);
+    // --average: frames more, the radiosity's filter keeping their mean, which differs from as
+    // many frames forgetting once the mean weighs the history above alpha (the 7th on).
+    let indirect = |frames: &[&str], file: &str| {
+        let output = cli()
+            .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--compare"])
+            .args(["--effect", "indirect", "--frames"])
+            .args(frames)
+            .arg("--estimate-exr")
+            .arg(dir.join(file))
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        std::fs::read(dir.join(file)).unwrap()
+    };
+    let forgetting = indirect(&["13"], "forgetting.exr");
+    assert_eq!(indirect(&["13"], "again.exr"), forgetting, "the same frames, the same bytes");
+    assert_ne!(indirect(&["3", "--average", "10"], "averaged.exr"), forgetting);
     // --estimate-exr needs --compare.
     let output = cli()
         .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--estimate-exr"])
