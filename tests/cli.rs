@@ -325,7 +325,8 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     assert!(estimate.iter().any(|v| *v > 0.0 && *v < 0.9), "{estimate:?}");
     // A preset reaches the estimate (`high`: 64 taps on 4 slices), and an explicit option
     // overrides the preset's (its 64 taps back to the default's 32 on 2 slices, radius 4).
-    let with = |args: &[&str], file: &str| {
+    // The GPU's estimate of one compare run, written to `file`.
+    let estimate_of = |args: &[&str], file: &str| {
         let output = cli()
             .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--compare"])
             .args(args)
@@ -334,6 +335,9 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
             .output()
             .unwrap();
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    };
+    let with = |args: &[&str], file: &str| {
+        estimate_of(args, file);
         read(file)
     };
     assert_ne!(with(&["--preset", "high"], "high.exr"), estimate);
@@ -342,15 +346,7 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     // --average: frames more, the radiosity's filter keeping their mean, which differs from as
     // many frames forgetting once the mean weighs the history above alpha (the 7th on).
     let indirect = |frames: &[&str], file: &str| {
-        let output = cli()
-            .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--compare"])
-            .args(["--effect", "indirect", "--frames"])
-            .args(frames)
-            .arg("--estimate-exr")
-            .arg(dir.join(file))
-            .output()
-            .unwrap();
-        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        estimate_of(&[&["--effect", "indirect", "--frames"], frames].concat(), file);
         std::fs::read(dir.join(file)).unwrap()
     };
     let forgetting = indirect(&["13"], "forgetting.exr");
