@@ -263,7 +263,7 @@ fn render_settles_the_radiosity_unless_told_a_frame_count() {
         .and_then(|l| l.split_whitespace().nth(5))
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{settled}"));
-    assert!((8..=64).contains(&frames) && frames.is_multiple_of(4), "{settled}");
+    assert!((8..=128).contains(&frames) && frames.is_multiple_of(4), "{settled}");
     // Then 32 frames more, each averaged in; `--average` sets how many.
     assert!(settled.contains("note: averaged 32 more frames of the settled view"), "{settled}");
     let two = run(&["builtin:cornell", "--average", "2"]);
