@@ -848,7 +848,7 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
             renderer.render(&gpu.device, &gpu.queue, &buffers, &at)?;
         }
         if args.average > 0 {
-            average_settled(&mut renderer, &gpu, &buffers, &camera, args.average)?;
+            average_settled(&mut renderer, &gpu, &buffers, &camera, args.average, None)?;
         }
         let terms = renderer.read_terms(&gpu.device, &gpu.queue)?;
         let (estimate, effect, what) = match args.effect {
@@ -1149,19 +1149,38 @@ const SETTLE_STEP: u32 = 4;
 /// Frames `render` averages after the radiosity settles, unless told otherwise.
 const DEFAULT_AVERAGE: u32 = 32;
 
+/// Writes the last frame's image, tone mapped at `exposure`, as `dir/frame_NNNN.png` (`index`).
+fn write_sequence_frame(
+    renderer: &Renderer,
+    gpu: &Gpu,
+    dir: &std::path::Path,
+    index: u32,
+    exposure: f32,
+) -> Result<()> {
+    let hdr = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.hdr_buffer())?;
+    let s = renderer.settings();
+    let path = dir.join(format!("frame_{index:04}.png"));
+    output::write_png_linear(&path, s.width, s.height, &output::tonemap(&hdr, exposure))
+}
+
 /// Renders `frames` more frames of the still `camera` after the radiosity settled, the
-/// temporal filter keeping their mean ([`Renderer::settle`]).
+/// temporal filter keeping their mean ([`Renderer::settle`]); `sequence`: the folder each frame
+/// is written to (`render --out-seq`), the first frame's number and the exposure.
 fn average_settled(
     renderer: &mut Renderer,
     gpu: &Gpu,
     buffers: &SceneBuffers,
     camera: &Camera,
     frames: u32,
+    sequence: Option<(&std::path::Path, u32, f32)>,
 ) -> Result<()> {
     renderer.settle();
     let bar = Progress::new(u64::from(frames), "averaged frames".into());
-    for _ in 0..frames {
+    for k in 0..frames {
         renderer.render(&gpu.device, &gpu.queue, buffers, camera)?;
+        if let Some((dir, first, exposure)) = sequence {
+            write_sequence_frame(renderer, gpu, dir, first + k, exposure)?;
+        }
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
@@ -1288,14 +1307,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         }
         renderer.render(&gpu.device, &gpu.queue, &buffers, &camera)?;
         if let Some(dir) = &args.out_seq {
-            let hdr = renderer.read_rgb(&gpu.device, &gpu.queue, renderer.hdr_buffer())?;
-            let path = dir.join(format!("frame_{i:04}.png"));
-            output::write_png_linear(
-                &path,
-                settings.width,
-                settings.height,
-                &output::tonemap(&hdr, args.exposure),
-            )?;
+            write_sequence_frame(&renderer, &gpu, dir, i, args.exposure)?;
         }
         if let Some(bar) = &bar {
             // Waits for the frame, so the count follows the GPU, not the queue.
@@ -1317,7 +1329,15 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
                     i + 1
                 );
                 if settled && args.average > 0 {
-                    average_settled(&mut renderer, &gpu, &buffers, &camera, args.average)?;
+                    let sequence = args.out_seq.as_deref().map(|d| (d, i + 1, args.exposure));
+                    average_settled(
+                        &mut renderer,
+                        &gpu,
+                        &buffers,
+                        &camera,
+                        args.average,
+                        sequence,
+                    )?;
                 }
                 break;
             }

@@ -268,6 +268,17 @@ fn render_settles_the_radiosity_unless_told_a_frame_count() {
     assert!(settled.contains("note: averaged 32 more frames of the settled view"), "{settled}");
     let two = run(&["builtin:cornell", "--average", "2"]);
     assert!(two.contains("note: averaged 2 more frames"), "{two}");
+    // --out-seq writes the averaged frames too, numbered on from the settled ones.
+    let seq = dir.join("seq");
+    let out = cli()
+        .args(["render", "builtin:cornell", "--size", "24x18", "--average", "2", "--out-seq"])
+        .arg(&seq)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written = std::fs::read_dir(&seq).unwrap().count() as u32;
+    assert_eq!(written, frames + 2, "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(seq.join(format!("frame_{:04}.png", frames + 1)).exists());
     assert!(!run(&["builtin:cornell", "--average", "0"]).contains("averaged"));
     let both = cli()
         .args(["render", "builtin:cornell", "--size", "24x18", "--frames", "3", "--average", "2"])
