@@ -1146,8 +1146,19 @@ fn info(adapter: &Option<String>) -> Result<()> {
 const SETTLE_MAX_FRAMES: u32 = 128;
 /// Frames between two looks at the radiosity while it settles.
 const SETTLE_STEP: u32 = 4;
+/// The radiosity has settled when its mean irradiance changed by at most this fraction over
+/// the last `SETTLE_STEP` frames.
+const SETTLE_CHANGE: f64 = 0.005;
 /// Frames `render` averages after the radiosity settles, unless told otherwise.
 const DEFAULT_AVERAGE: u32 = 32;
+
+/// Waits for the frames submitted, so that a progress count follows the GPU, not the queue.
+fn wait_for_frame(gpu: &Gpu) -> Result<()> {
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map(drop)
+        .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })
+}
 
 /// Writes the last frame's image, tone mapped at `exposure`, as `dir/frame_NNNN.png` (`index`).
 fn write_sequence_frame(
@@ -1181,19 +1192,13 @@ fn average_settled(
         if let Some((dir, first, exposure)) = sequence {
             write_sequence_frame(renderer, gpu, dir, first + k, exposure)?;
         }
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
+        wait_for_frame(gpu)?;
         bar.inc();
     }
     bar.finish();
     eprintln!("note: averaged {frames} more frames of the settled view (--average sets how many)");
     Ok(())
 }
-
-/// The radiosity has settled when its mean irradiance changed by at most this fraction over
-/// the last `SETTLE_STEP` frames.
-const SETTLE_CHANGE: f64 = 0.005;
 
 /// The mean irradiance (over pixels and channels) the composite reads from the radiosity.
 fn mean_irradiance(renderer: &Renderer, gpu: &Gpu) -> Result<f64> {
@@ -1310,10 +1315,7 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             write_sequence_frame(&renderer, &gpu, dir, i, args.exposure)?;
         }
         if let Some(bar) = &bar {
-            // Waits for the frame, so the count follows the GPU, not the queue.
-            gpu.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| Error::Gpu { label: "frame".into(), message: e.to_string() })?;
+            wait_for_frame(&gpu)?;
             bar.inc();
         }
         if settle && (i + 1).is_multiple_of(SETTLE_STEP) {

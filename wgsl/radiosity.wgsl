@@ -382,6 +382,20 @@ fn first_hidden(g: Gathered, bits: u32) -> u32 {
     return countOneBits(bits & ~g.occupied);
 }
 
+// Sends `light` into the sectors a point hid first: `first` of every step's, `first_half` of
+// every other step's.
+fn send(every: ptr<function, Gathered>, half: ptr<function, Gathered>, light: vec3<f32>, first: u32, first_half: u32) {
+    (*every).sum += light * f32(first);
+    (*half).sum += light * f32(first_half);
+}
+
+// Marks `bits` hidden among every step's sectors, and among every other step's on an `even`
+// step.
+fn occupy(every: ptr<function, Gathered>, half: ptr<function, Gathered>, bits: u32, even: bool) {
+    (*every).occupied |= bits;
+    (*half).occupied |= select(0u, bits, even);
+}
+
 // What the grazing point g sends towards X (view point c), the next step along the slice finding
 // the layer-0 point y2 (normal n2; `found` false where it found none): a blend from H towards B
 // by its cosine over GRAZING where its surface bends away from X within X's distance (the next
@@ -458,8 +472,7 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                 }
                 if grazing.on {
                     last.light = grazing_light(grazing, c, found, y, ny);
-                    every.sum += last.light * f32(grazing.count);
-                    half.sum += last.light * f32(grazing.count_half);
+                    send(&every, &half, last.light, grazing.count, grazing.count_half);
                     grazing.on = false;
                 }
                 if !found {
@@ -486,29 +499,23 @@ fn slices_gather(pixel: vec2<u32>, noise_at: vec2<u32>, s: GSample) -> vec4<f32>
                     }
                     // A grazing point's light waits for the next step.
                     if !grazing.on {
-                        every.sum += light * f32(first);
-                        half.sum += light * f32(first_half);
+                        send(&every, &half, light, first, first_half);
                     }
                 }
-                every.occupied |= bits;
-                half.occupied |= select(0u, bits, even);
+                occupy(&every, &half, bits, even);
                 if z1 > z0 {
                     bits = solid_sectors(sl, c, n, at, along, z1, backs.y, 0.0, params.radius, &front2);
                     first = first_hidden(every, bits);
                     first_half = select(0u, first_hidden(half, bits), even);
                     if first + first_half > 0u {
-                        let light = sent(t, 1u, c, at, z1);
-                        every.sum += light * f32(first);
-                        half.sum += light * f32(first_half);
+                        send(&every, &half, sent(t, 1u, c, at, z1), first, first_half);
                     }
-                    every.occupied |= bits;
-                    half.occupied |= select(0u, bits, even);
+                    occupy(&every, &half, bits, even);
                 }
             }
             // A grazing point with no step after it: nothing tells that its surface bends.
             if grazing.on {
-                every.sum += grazing.b * f32(grazing.count);
-                half.sum += grazing.b * f32(grazing.count_half);
+                send(&every, &half, grazing.b, grazing.count, grazing.count_half);
             }
         }
         // Richardson's extrapolation in the steps a side, as the obscurance's.

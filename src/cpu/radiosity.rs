@@ -222,6 +222,22 @@ impl Gathered {
     }
 }
 
+/// As `send`: `light` into the sectors a point hid first, `first` of every step's and
+/// `first_half` of every other step's.
+fn send(every: &mut Gathered, half: &mut Gathered, light: Vec3, first: u32, first_half: u32) {
+    every.sum += light * first as f32;
+    half.sum += light * first_half as f32;
+}
+
+/// As `occupy`: `bits` hidden among every step's sectors, and every other step's on an `even`
+/// step.
+fn occupy(every: &mut Gathered, half: &mut Gathered, bits: u32, even: bool) {
+    every.occupied |= bits;
+    if even {
+        half.occupied |= bits;
+    }
+}
+
 /// What the gather reads.
 struct Gather<'a> {
     f: &'a FrameUniform,
@@ -296,8 +312,7 @@ impl Gather<'_> {
                         .map(|(t, at)| (view_position(f, at, t.depth(0)), t.normal(0)));
                     if let Some(g) = grazing.take() {
                         let light = g.light(c, point);
-                        every.sum += light * g.count as f32;
-                        half.sum += light * g.count_half as f32;
+                        send(&mut every, &mut half, light, g.count, g.count_half);
                         if let Some(l) = last.as_mut() {
                             l.light = light;
                         }
@@ -312,10 +327,7 @@ impl Gather<'_> {
                     let first_half = if even { half.first(bits) } else { 0 };
                     match point {
                         _ if bits == 0 => {}
-                        None => {
-                            every.sum += t.radiance(0) * first as f32;
-                            half.sum += t.radiance(0) * first_half as f32;
-                        }
+                        None => send(&mut every, &mut half, t.radiance(0), first, first_half),
                         Some((y, ny)) => {
                             // The rules for curved surfaces.
                             let d = c - y;
@@ -345,31 +357,24 @@ impl Gather<'_> {
                             }
                             last = Some(Sender { light, y, n: ny, facing });
                             if grazing.is_none() {
-                                every.sum += light * first as f32;
-                                half.sum += light * first_half as f32;
+                                send(&mut every, &mut half, light, first, first_half);
                             }
                         }
                     }
-                    every.occupied |= bits;
-                    if even {
-                        half.occupied |= bits;
-                    }
+                    occupy(&mut every, &mut half, bits, even);
                     if z1 > z0 {
                         let (bits, _) =
                             sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
+                        let first = every.first(bits);
+                        let first_half = if even { half.first(bits) } else { 0 };
                         let light = self.sent(t, 1, c, at, z1);
-                        every.sum += light * every.first(bits) as f32;
-                        every.occupied |= bits;
-                        if even {
-                            half.sum += light * half.first(bits) as f32;
-                            half.occupied |= bits;
-                        }
+                        send(&mut every, &mut half, light, first, first_half);
+                        occupy(&mut every, &mut half, bits, even);
                     }
                 }
                 // A grazing point with no step after it: nothing tells that its surface bends.
                 if let Some(g) = grazing {
-                    every.sum += g.b * g.count as f32;
-                    half.sum += g.b * g.count_half as f32;
+                    send(&mut every, &mut half, g.b, g.count, g.count_half);
                 }
             }
             // Richardson's extrapolation in the steps a side.
