@@ -379,6 +379,15 @@ struct RadiosityArgs {
     /// [default: 0.8].
     #[arg(long)]
     damping: Option<f32>,
+    /// Weight of the history in the radiosity's temporal filter while the camera or the scene
+    /// moves, in [0, 1) [default: 0.85].
+    #[arg(long)]
+    radiosity_alpha: Option<f32>,
+    /// Weight of the history in the radiosity's temporal filter while the view stands still,
+    /// until the bounces settle, in [0, 1): lower reaches the later bounces in fewer frames,
+    /// with more noise in each [default: 0.7].
+    #[arg(long)]
+    radiosity_still_alpha: Option<f32>,
     /// Take a surface's outgoing light only where it faces the gathering point; a slices
     /// gather takes what a surface facing away sends from its far side, its emission and the
     /// indirect light it reflects, and from a curved surface the side the point sees (see
@@ -405,6 +414,8 @@ impl RadiosityArgs {
         r.mip_offset = self.radiosity_mip_offset.unwrap_or(r.mip_offset);
         r.downsample = self.radiosity_downsample.unwrap_or(r.downsample);
         r.damping = self.damping.unwrap_or(r.damping);
+        r.alpha = self.radiosity_alpha.unwrap_or(r.alpha);
+        r.still_alpha = self.radiosity_still_alpha.unwrap_or(r.still_alpha);
         r.normal_test = self.radiosity_normal_test.unwrap_or(r.normal_test);
         r.offscreen = self.radiosity_offscreen.unwrap_or(r.offscreen);
     }

@@ -105,6 +105,26 @@ fn diverging_feedback_is_refused() {
     bounded.validate().unwrap();
 }
 
+/// Either filter weight outside [0, 1) is refused, naming its field.
+#[test]
+fn filter_weights_outside_the_unit_interval_are_refused() {
+    for (s, name) in [
+        (RadiositySettings { alpha: 1.0, ..Default::default() }, "radiosity.alpha"),
+        (RadiositySettings { alpha: -0.1, ..Default::default() }, "radiosity.alpha"),
+        (RadiositySettings { still_alpha: 1.0, ..Default::default() }, "radiosity.still_alpha"),
+        (
+            RadiositySettings { still_alpha: f32::NAN, ..Default::default() },
+            "radiosity.still_alpha",
+        ),
+    ] {
+        match s.validate() {
+            Err(deep_gbuffer::Error::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    RadiositySettings { still_alpha: 0.0, ..Default::default() }.validate().unwrap();
+}
+
 /// The gather source `buffer` (a [`SourceTexel`] per texel) read back.
 fn read_source(buffer: &deep_gbuffer::wgpu::Buffer) -> Vec<SourceTexel> {
     let g = gpu();
@@ -595,14 +615,21 @@ fn radiosity_of_stored_gbuffers_matches_cpu_reference() {
 fn a_still_view_stops_flickering() {
     let r = RadiositySettings::default();
     let settle = r.settle_frames();
-    // alpha 0.85 and a feedback gain of at most 0.8: 0.97 a frame, 227 frames to 1e-3.
-    assert_eq!(settle, 227);
-    assert_eq!(r.history_weight(0), r.alpha);
-    assert_eq!(r.history_weight(settle + 5), r.alpha, "1 - 1/6 is below alpha");
+    // A still view's weight 0.7 and a feedback gain of at most 0.8: 0.94 a frame, 112 frames
+    // to 1e-3.
+    assert_eq!(settle, 112);
+    assert_eq!(r.history_weight(0), r.alpha, "a moving view");
+    assert_eq!(r.history_weight(1), r.still_alpha);
+    assert_eq!(r.history_weight(settle), r.still_alpha);
+    assert_eq!(r.history_weight(settle + 2), r.still_alpha, "1 - 1/3 is below still_alpha");
     assert!((r.history_weight(settle + 99) - 0.99).abs() < 1e-6);
     assert!((r.history_weight(u32::MAX) - (1.0 - 1.0 / 1024.0)).abs() < 1e-6);
     let fixed = RadiositySettings { jitter: false, ..r.clone() };
-    assert_eq!(fixed.history_weight(settle + 99), r.alpha, "no noise to average without jitter");
+    assert_eq!(fixed.history_weight(0), r.alpha);
+    assert_eq!(fixed.history_weight(settle + 99), r.still_alpha, "no noise to average");
+    let same = RadiositySettings { still_alpha: r.alpha, ..r.clone() };
+    // alpha 0.85: 0.97 a frame, 227 frames.
+    assert_eq!(same.settle_frames(), 227);
 
     let g = gpu();
     let (camera, buffers) = cornell_uploaded();
@@ -630,6 +657,45 @@ fn a_still_view_stops_flickering() {
     let before_settling = again[settle as usize - 20..].iter().sum::<f32>() / 20.0;
     eprintln!("after a move: {before_settling}");
     assert!(before_settling > 0.5 * exponential, "{before_settling} against {exponential}");
+}
+
+/// A still view takes the still weight (`RadiositySettings::still_alpha`): each frame carries the
+/// bounces further than the moving view's weight would, so the light climbs to the same fixed
+/// point in fewer frames.
+#[test]
+fn a_still_view_reaches_its_bounces_sooner() {
+    let g = gpu();
+    let (camera, buffers) = cornell_uploaded();
+    // The mean of the filtered irradiance after each of `n` frames.
+    let means = |still_alpha: f32, n: usize| -> Vec<f32> {
+        let mut s = settings(32, 24);
+        s.radiosity.still_alpha = still_alpha;
+        let mut renderer = Renderer::new(&g.device, &g.queue, s).unwrap();
+        (0..n)
+            .map(|_| {
+                renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+                let now = read4(&renderer, renderer.radiosity_buffers().unwrap().filtered);
+                now.iter().map(|v| v.truncate().element_sum()).sum::<f32>() / now.len() as f32
+            })
+            .collect()
+    };
+    let alpha = RadiositySettings::default().alpha;
+    let fast = means(RadiositySettings::default().still_alpha, 200);
+    let slow = means(alpha, 300);
+    // Past their settle_frames (112 and 227) both filters average: the fixed point's mean.
+    let settled = |m: &[f32]| m[m.len() - 50..].iter().sum::<f32>() / 50.0;
+    let (to_fast, to_slow) = (settled(&fast), settled(&slow));
+    eprintln!("settled means: {to_fast} (still weight), {to_slow} (alpha)");
+    assert_eq!(fast[0], slow[0], "the first frame has no history");
+    assert!((to_fast - to_slow).abs() < 0.02 * to_slow, "one fixed point");
+    // What each still lacks of it, summed over the first 32 frames: c^n sums to 1 / (1 - c), c =
+    // a + (1 - a) g for a feedback gain g (0.8 at most: half). The image's mean at 32x24 moves
+    // by several per cent from frame to frame with the turned slices, alike in both runs.
+    let lacking = |m: &[f32], to: f32| m[1..32].iter().map(|x| to - x).sum::<f32>();
+    let (f, s) = (lacking(&fast, to_fast), lacking(&slow, to_slow));
+    eprintln!("lacking over 32 frames: {f} (still weight), {s} (alpha)");
+    assert!(s > 0.1 * to_slow, "the moving view's weight climbs for frames: {s}");
+    assert!(f < 0.7 * s, "{f} against {s}");
 }
 
 /// A host that has measured the bounces settle (`Renderer::settle`, as `deep-gbuffer render`
