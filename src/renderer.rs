@@ -583,7 +583,7 @@ impl Renderer {
     /// changes by less than 0.5% over four frames). From the next frame that shows the same view
     /// the radiosity's temporal filter keeps the mean of the frames since, as it would after
     /// [`RadiositySettings::settle_frames`](crate::RadiositySettings::settle_frames) still frames
-    /// (a bound for any scene, 227 with the defaults): the gather's noise, which the turned
+    /// (a bound for any scene, 112 with the defaults): the gather's noise, which the turned
     /// slices make different every frame, then falls as one over the square root of the frames,
     /// where the exponential filter keeps it at a fixed share of one frame's. A frame whose view
     /// moves, or [`reset_history`](Self::reset_history), forgets it.
