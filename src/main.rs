@@ -597,8 +597,8 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = RasterWork::Auto)]
     raster_work: RasterWork,
     /// Frames to render (the outputs are the last frame's) [default: until the radiosity
-    /// settles, when it runs: its mean irradiance changes by less than 0.5% over 4 frames, at
-    /// most 128 frames; else 1].
+    /// settles, when it runs: its mean irradiance over 4 frames differs by less than 0.5% from
+    /// the 4 before, at most 128 frames; else 1].
     #[arg(long)]
     frames: Option<u32>,
     /// Frames rendered after the radiosity settles (without --frames), each averaged in: the
@@ -1157,8 +1157,10 @@ fn info(adapter: &Option<String>) -> Result<()> {
 const SETTLE_MAX_FRAMES: u32 = 128;
 /// Frames between two looks at the radiosity while it settles.
 const SETTLE_STEP: u32 = 4;
-/// The radiosity has settled when its mean irradiance changed by at most this fraction over
-/// the last `SETTLE_STEP` frames.
+/// The radiosity has settled when the mean irradiance of its last `SETTLE_STEP` frames differs
+/// by at most this fraction from that of the `SETTLE_STEP` frames before: means over frames,
+/// so that the turned slices' noise in one frame's mean (on a small image as large as the
+/// change looked for) neither stops a climbing view nor keeps a settled one going.
 const SETTLE_CHANGE: f64 = 0.005;
 /// Frames `render` averages after the radiosity settles, unless told otherwise.
 const DEFAULT_AVERAGE: u32 = 32;
@@ -1306,6 +1308,8 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     // Without --frames, a still camera renders until the temporal radiosity settles.
     let settle = args.frames.is_none() && renderer.plan(&buffers, &camera).runs(Effect::Radiosity);
     let frames = args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES } else { 1 });
+    // The mean irradiance of the frames since the last look, and the last look's.
+    let mut window = 0.0;
     let mut last_mean: Option<f64> = None;
     let start = camera.clone();
     let moving = match &args.moving {
@@ -1329,8 +1333,11 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             wait_for_frame(&gpu)?;
             bar.inc();
         }
+        if settle {
+            window += mean_irradiance(&renderer, &gpu)? / f64::from(SETTLE_STEP);
+        }
         if settle && (i + 1).is_multiple_of(SETTLE_STEP) {
-            let mean = mean_irradiance(&renderer, &gpu)?;
+            let mean = std::mem::take(&mut window);
             let settled = last_mean.is_some_and(|m| (mean - m).abs() <= SETTLE_CHANGE * mean);
             if settled || i + 1 == frames {
                 if let Some(bar) = &bar {

@@ -169,6 +169,8 @@ fn bad_input_gives_one_line_and_a_failure_code() {
             vec!["render".into(), "--radiosity-extrapolation".into(), "2.5".into()],
             "radiosity.extrapolation",
         ),
+        (vec!["render".into(), "--radiosity-alpha".into(), "1".into()], "radiosity.alpha"),
+        (vec!["truth".into(), "--radiosity-still-alpha=-0.5".into()], "radiosity.still_alpha"),
         (vec!["render".into(), "--reflection-lobe-samples".into(), "0".into()], "lobe_samples"),
         (vec!["truth".into(), "--reflection-thickness=-1".into()], "reflections.thickness"),
         (vec!["truth".into(), "--turn".into(), "NaN".into()], "turn"),
@@ -266,6 +268,10 @@ fn render_settles_the_radiosity_unless_told_a_frame_count() {
     assert!((8..=128).contains(&frames) && frames.is_multiple_of(4), "{settled}");
     // Then 32 frames more, each averaged in; `--average` sets how many.
     assert!(settled.contains("note: averaged 32 more frames of the settled view"), "{settled}");
+    // The filter's weights are settings like the rest (tests/radiosity.rs measures them).
+    let weighted =
+        run(&["builtin:cornell", "--radiosity-alpha", "0.9", "--radiosity-still-alpha", "0.85"]);
+    assert!(weighted.contains("note: the radiosity settled after "), "{weighted}");
     let two = run(&["builtin:cornell", "--average", "2"]);
     assert!(two.contains("note: averaged 2 more frames"), "{two}");
     // --out-seq writes the averaged frames too, numbered on from the settled ones.
