@@ -355,8 +355,9 @@ struct RadiosityArgs {
     /// Slices per pixel of the slices gather [default: 2].
     #[arg(long)]
     radiosity_slices: Option<u32>,
-    /// Slices the slices gather takes in a frame that has the temporal history (they turn every
-    /// frame; a first frame takes all), 0 to 16 (0: all) [default: 0].
+    /// Slices the slices gather takes in a frame whose view moved and that has the temporal
+    /// history (they turn every frame; a first frame and a still view take all), 0 to 16 (0:
+    /// all) [default: 1].
     #[arg(long)]
     radiosity_history_slices: Option<u32>,
     /// Taps per layer-1 point of the gather that lets surfaces the camera does not see pass on
@@ -380,7 +381,7 @@ struct RadiosityArgs {
     #[arg(long)]
     damping: Option<f32>,
     /// Weight of the history in the radiosity's temporal filter while the camera or the scene
-    /// moves, in [0, 1) [default: 0.85].
+    /// moves, in [0, 1) [default: 0.9].
     #[arg(long)]
     radiosity_alpha: Option<f32>,
     /// Weight of the history in the radiosity's temporal filter while the view stands still,

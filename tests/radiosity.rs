@@ -147,25 +147,26 @@ fn first_frame_against_cpu(radiosity: RadiositySettings) {
     assert!(lit > raw.len() / 2, "the box receives indirect light ({lit})");
 }
 
-/// With the history a frame gathers `history_slices` of the slices, each with the steps a side
-/// all of them take (the layer-1 gather too); a first frame, slices that do not turn or the
-/// spiral take them all. The second frame's gather against the CPU's with that frame's taps, and
-/// not with all of them.
+/// With the history a frame whose view moved gathers `history_slices` of the slices, each with
+/// the steps a side all of them take (the layer-1 gather too); a first frame, a still view,
+/// slices that do not turn or the spiral take them all. A moved second frame's gather against
+/// the CPU's with that frame's taps, and not with all of them.
 #[test]
 fn a_frame_with_history_gathers_its_history_slices() {
     // The gather alone, as `settings` sets it.
     let radiosity = RadiositySettings { history_slices: 1, offscreen: false, ..Default::default() };
-    assert_eq!(radiosity.frame_taps(false), (2, 32, 8), "a first frame takes every slice");
-    assert_eq!(radiosity.frame_taps(true), (1, 16, 4), "one slice of two, 8 and 2 steps a side");
+    assert_eq!(radiosity.frame_taps(false, 0), (2, 32, 8), "a first frame takes every slice");
+    assert_eq!(radiosity.frame_taps(true, 0), (1, 16, 4), "one slice of two, 8 and 2 steps a side");
+    assert_eq!(radiosity.frame_taps(true, 1), (2, 32, 8), "a still view takes every slice");
     let fixed = RadiositySettings { jitter: false, ..radiosity.clone() };
-    assert_eq!(fixed.frame_taps(true), (2, 32, 8), "slices that do not turn are all taken");
+    assert_eq!(fixed.frame_taps(true, 0), (2, 32, 8), "slices that do not turn are all taken");
     let spiral = RadiositySettings { estimator: RadiosityEstimator::Spiral, ..radiosity.clone() };
-    assert_eq!(spiral.frame_taps(true), (2, 32, 8), "the spiral has no slices");
+    assert_eq!(spiral.frame_taps(true, 0), (2, 32, 8), "the spiral has no slices");
     let four = RadiositySettings { slices: 4, samples: 64, history_slices: 3, ..radiosity.clone() };
-    assert_eq!(four.frame_taps(true), (3, 48, 6));
+    assert_eq!(four.frame_taps(true, 0), (3, 48, 6));
     for all in [0, 2, 5] {
         let r = RadiositySettings { history_slices: all, ..radiosity.clone() };
-        assert_eq!(r.frame_taps(true), (2, 32, 8), "{all}: every slice");
+        assert_eq!(r.frame_taps(true, 0), (2, 32, 8), "{all}: every slice");
     }
     let too_many = RadiositySettings { history_slices: 17, ..radiosity.clone() };
     let e = too_many.validate().unwrap_err().to_string();
@@ -175,7 +176,7 @@ fn a_frame_with_history_gathers_its_history_slices() {
     let (w, h) = (64, 48);
     let camera = scene.camera_or_default();
     let settings = Settings { radiosity: radiosity.clone(), ..settings(w, h) };
-    let r = render_frames(&scene, &[camera.clone(), camera], settings);
+    let r = render_frames(&scene, &[camera.clone(), camera.orbited(0.5)], settings);
     let g = gpu();
     let layers = [0, 1].map(|l| r.renderer.read_gbuffer(&g.device, &g.queue, l).unwrap().samples);
     let buffers = r.renderer.radiosity_buffers().expect("radiosity runs");
@@ -185,9 +186,9 @@ fn a_frame_with_history_gathers_its_history_slices() {
     let far = |a: &Vec4, e: &Vec4| {
         (*a - *e).abs().max_element() > RADIOSITY_TOLERANCE * e.max_element().max(1.0)
     };
-    // The second frame has the history and the slices' first turn.
+    // The second frame has the history (where its points were seen) and the slices' first turn.
     let gather = |settings: &RadiositySettings| {
-        let uniform = RadiosityUniform::new(settings, &layout, true, 1);
+        let uniform = RadiosityUniform::new(settings, &layout, (true, 0), 1);
         cpu::gather(&r.frame, &uniform, [&layers[0], &layers[1]], &source, &layout, (0, 0))
     };
     let expected = gather(&radiosity);
@@ -218,7 +219,7 @@ fn first_frame_matches(
     // B without history is the boosted Lambertian part of the direct light + emission (layer 0's
     // checked in tests/direct.rs), held in RGB9E5: within 2^-9 of a texel's largest channel (the
     // format's rounding) besides f32 rounding.
-    let uniform = RadiosityUniform::new(radiosity, &layout, false, 0);
+    let uniform = RadiosityUniform::new(radiosity, &layout, (false, 0), 0);
     let diffuse0 = renderer.read_rgb(&g.device, &g.queue, renderer.diffuse_buffer(0)).unwrap();
     let expected_b0 = cpu::feedback_without_history(&uniform, layers[0], &diffuse0);
     for (p, (t, e)) in source[..pixels].iter().zip(&expected_b0).enumerate() {
@@ -338,7 +339,7 @@ fn layer1_reflects_the_last_frames_layer1_gather() {
         let diffuse1 = renderer.read_rgb(&g.device, &g.queue, renderer.diffuse_buffer(1)).unwrap();
         let source = read_source(renderer.radiosity_buffers().unwrap().source);
         let layout = PyramidLayout::new(64, 48);
-        let uniform = RadiosityUniform::new(&radiosity, &layout, true, 1);
+        let uniform = RadiosityUniform::new(&radiosity, &layout, (true, 0), 1);
         let (mut points, mut bounced) = (0, 0);
         for (p, s1) in layer1.iter().enumerate() {
             if s1.depth.is_nan() || s1.depth <= 0.0 {
@@ -627,8 +628,8 @@ fn a_still_view_stops_flickering() {
     let fixed = RadiositySettings { jitter: false, ..r.clone() };
     assert_eq!(fixed.history_weight(0), r.alpha);
     assert_eq!(fixed.history_weight(settle + 99), r.still_alpha, "no noise to average");
-    let same = RadiositySettings { still_alpha: r.alpha, ..r.clone() };
-    // alpha 0.85: 0.97 a frame, 227 frames.
+    let same = RadiositySettings { still_alpha: 0.85, ..r.clone() };
+    // 0.85: 0.97 a frame, 227 frames.
     assert_eq!(same.settle_frames(), 227);
 
     let g = gpu();

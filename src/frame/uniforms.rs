@@ -183,13 +183,20 @@ mirrored!(
 
 impl RadiosityUniform {
     /// The constants for `s` over a gather source of `layout`; `history` tells whether the
-    /// previous frame may be used, `turn` the frame count since the history began.
+    /// previous frame may be used, `still` how many frames in a row the view has stood still
+    /// (0: it moved), `turn` the frame count since the history began.
     ///
     /// With the history, a `slices` gather that turns every frame gathers
-    /// [`RadiositySettings::history_slices`] of its slices (each with the same steps a side, in
-    /// both gathers): the temporal filter holds the others' light from the frames before.
-    pub fn new(s: &RadiositySettings, layout: &PyramidLayout, history: bool, turn: u32) -> Self {
-        let (slices, samples, layer1_samples) = s.frame_taps(history);
+    /// [`RadiositySettings::history_slices`] of its slices while the view moves (each with the
+    /// same steps a side, in both gathers): the temporal filter holds the others' light from
+    /// the frames before. A still view gathers them all.
+    pub fn new(
+        s: &RadiositySettings,
+        layout: &PyramidLayout,
+        (history, still): (bool, u32),
+        turn: u32,
+    ) -> Self {
+        let (slices, samples, layer1_samples) = s.frame_taps(history, still);
         RadiosityUniform {
             radius: s.radius,
             samples,

@@ -154,7 +154,7 @@ impl RadiosityStage {
         self.turn = if history && s.radiosity.jitter { self.turn.wrapping_add(1) } else { 0 };
         let uniform = RadiosityUniform {
             alpha: s.radiosity.history_weight(still),
-            ..RadiosityUniform::new(&s.radiosity, self.levels.layout(), history, self.turn)
+            ..RadiosityUniform::new(&s.radiosity, self.levels.layout(), (history, still), self.turn)
         };
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         self.temporal.prepare(queue, uniform.alpha, uniform.tolerance, history);
