@@ -239,6 +239,11 @@ fn presets_set_the_knobs_and_keep_the_plan_in_charge_of_layers() {
         (64, 4, 3, 64)
     );
     assert_eq!(ultra.layers, 0);
+    // The quality presets gather every radiosity slice on every frame, under the filter they
+    // were measured with; the others one slice a moving frame, as the defaults.
+    assert_eq!((ultra.radiosity.history_slices, ultra.radiosity.alpha), (0, 0.85));
+    let defaults = deep_gbuffer::RadiositySettings::default();
+    assert_eq!((low.radiosity.history_slices, low.radiosity.alpha), (1, defaults.alpha));
     assert_eq!(low.ao.blur_radius, Settings::default().ao.blur_radius);
     assert!(ultra.ao.two_layers);
     assert!(ultra.reflections.shadow_maps);
