@@ -117,9 +117,13 @@ struct SweepArgs {
     /// Radii of the obscurance's blur to sweep, in pixels (0: none).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().ao_blur_radius))]
     ao_blur_radius: Vec<u32>,
-    /// Radiosity slices a frame with the temporal history gathers, to sweep (0: all).
+    /// Radiosity slices a moving frame with the temporal history gathers, to sweep (0: all).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_history_slices))]
     radiosity_history_slices: Vec<u32>,
+    /// Weights of the history in the radiosity's temporal filter to sweep, in [0, 1) (the
+    /// sweep's frames move).
+    #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().radiosity_alpha))]
+    radiosity_alpha: Vec<f32>,
     /// Layer counts to sweep (1, 2).
     #[arg(long, value_delimiter = ',', default_value = listed(&deep_gbuffer::sweep::Grid::default().layers))]
     layers: Vec<u32>,
@@ -984,6 +988,7 @@ fn sweep(adapter: &Option<String>, args: SweepArgs) -> Result<()> {
         radiosity_layer1_samples: args.radiosity_layer1_samples,
         radiosity_extrapolation: args.radiosity_extrapolation,
         radiosity_history_slices: args.radiosity_history_slices,
+        radiosity_alpha: args.radiosity_alpha,
         layers: args.layers,
         precision: args.precision,
         position: args.position_encoding,

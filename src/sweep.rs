@@ -61,9 +61,12 @@ pub struct Knobs {
     pub radiosity_layer1_samples: u32,
     /// Weight of the slices gather's extrapolation ([`RadiositySettings::extrapolation`]).
     pub radiosity_extrapolation: f32,
-    /// Radiosity slices a frame with the temporal history gathers
+    /// Radiosity slices a moving frame with the temporal history gathers
     /// ([`RadiositySettings::history_slices`]; 0: all).
     pub radiosity_history_slices: u32,
+    /// Weight of the history in the radiosity's temporal filter while the view moves
+    /// ([`RadiositySettings::alpha`]): the sweep's frames all move.
+    pub radiosity_alpha: f32,
     /// G-buffer layers (1: layer 0 only, for both effects; 2: the deep G-buffer).
     pub layers: u32,
     /// G-buffer encoding.
@@ -144,6 +147,7 @@ impl Knobs {
                 layer1_samples: self.radiosity_layer1_samples,
                 extrapolation: self.radiosity_extrapolation,
                 history_slices: self.radiosity_history_slices,
+                alpha: self.radiosity_alpha,
                 radius: self.radiosity_radius,
                 mip_offset: self.radiosity_mip_offset,
                 downsample: self.radiosity_downsample,
@@ -210,8 +214,10 @@ pub struct Grid {
     pub radiosity_layer1_samples: Vec<u32>,
     /// Weights of the radiosity steps' extrapolation.
     pub radiosity_extrapolation: Vec<f32>,
-    /// Radiosity slices a frame with the history gathers.
+    /// Radiosity slices a moving frame with the history gathers.
     pub radiosity_history_slices: Vec<u32>,
+    /// Weights of the history in the radiosity's temporal filter.
+    pub radiosity_alpha: Vec<f32>,
     /// Layer counts.
     pub layers: Vec<u32>,
     /// Encodings.
@@ -267,6 +273,7 @@ impl Default for Grid {
             radiosity_layer1_samples: vec![settings.radiosity.layer1_samples],
             radiosity_extrapolation: vec![settings.radiosity.extrapolation],
             radiosity_history_slices: vec![settings.radiosity.history_slices],
+            radiosity_alpha: vec![settings.radiosity.alpha],
             layers: vec![1, 2],
             precision: vec![Precision::Full],
             position: vec![settings.position],
@@ -317,6 +324,7 @@ impl Grid {
             radiosity_layer1_samples: settings.radiosity.layer1_samples,
             radiosity_extrapolation: settings.radiosity.extrapolation,
             radiosity_history_slices: settings.radiosity.history_slices,
+            radiosity_alpha: settings.radiosity.alpha,
             layers: 2,
             precision: settings.precision,
             position: settings.position,
@@ -353,6 +361,7 @@ impl Grid {
         let k = times(k, &self.radiosity_layer1_samples, |k, v| k.radiosity_layer1_samples = v);
         let k = times(k, &self.radiosity_extrapolation, |k, v| k.radiosity_extrapolation = v);
         let k = times(k, &self.radiosity_history_slices, |k, v| k.radiosity_history_slices = v);
+        let k = times(k, &self.radiosity_alpha, |k, v| k.radiosity_alpha = v);
         let k = times(k, &self.layers, |k, v| k.layers = v);
         let k = times(k, &self.ao_estimator, |k, v| k.ao_estimator = v);
         let k = times(k, &self.ao_slices, |k, v| k.ao_slices = v);
@@ -667,7 +676,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     let reflective = rows.iter().any(|r| r.reflections.is_some());
     let mut out = String::from(
-        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,ao_blur_radius,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_extrapolation,radiosity_history_slices,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
+        "ao_estimator,ao_slices,ao_samples,ao_alpha,ao_extrapolation,ao_blur_radius,radiosity_samples,radiosity_slices,radiosity_layer1_samples,radiosity_extrapolation,radiosity_history_slices,radiosity_alpha,layers,precision,position,radiosity_radius,mip_offset,radiosity_mip_offset,ao_downsample,radiosity_downsample,radiosity_offscreen,reflection_shadow_maps,dof_samples,transparency_layers,shutter,dz,layer1,scale",
     );
     for n in &names {
         out += &format!(",ms_{n}");
@@ -690,7 +699,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     for r in rows {
         let k = &r.knobs;
         out += &format!(
-            "{:?},{},{},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
+            "{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{},{},{},{},{},{},{},{},{},{},{},{},{:?},{}",
             k.ao_estimator,
             k.ao_slices,
             k.ao_samples,
@@ -702,6 +711,7 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             k.radiosity_layer1_samples,
             k.radiosity_extrapolation,
             k.radiosity_history_slices,
+            k.radiosity_alpha,
             k.layers,
             k.precision,
             k.position.name(),
@@ -770,7 +780,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
     let image_front = pareto_front(&points(rows, |r| r.total_ms, |r| r.full.rmse));
     // Knob columns: the tap counts and layers always, the others where the grid varies them.
     type Column = (&'static str, fn(&Knobs) -> String);
-    let optional: [Column; 24] = [
+    let optional: [Column; 25] = [
         ("AO estimator", |k| k.ao_estimator.name().to_string()),
         ("AO slices", |k| k.ao_slices.to_string()),
         ("AO history weight", |k| k.ao_alpha.to_string()),
@@ -783,6 +793,7 @@ pub fn write_markdown(path: &Path, rows: &[Row], heading: &str) -> Result<()> {
         ("layer-1 radiosity taps", |k| k.radiosity_layer1_samples.to_string()),
         ("radiosity extrapolation", |k| k.radiosity_extrapolation.to_string()),
         ("radiosity slices with history", |k| k.radiosity_history_slices.to_string()),
+        ("radiosity history weight", |k| k.radiosity_alpha.to_string()),
         ("MIP offset", |k| k.mip_offset.to_string()),
         ("radiosity MIP offset", |k| k.radiosity_mip_offset.to_string()),
         ("AO downsample", |k| k.ao_downsample.to_string()),
