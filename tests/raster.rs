@@ -58,8 +58,9 @@ fn mismatches(gpu: &[u64], cpu: &[u64], width: u32) -> (usize, String) {
 }
 
 /// Both layers of `scene` from `camera`: the GPU's must equal the CPU reference's bit for bit,
-/// with the work shared out both ways (`RasterWork::Gpu`, whose small-triangle size, slices and
-/// tile test a GPU gets, and `RasterWork::Cpu`, a CPU driver's), whatever the device.
+/// with the work shared out both ways (`RasterWork::Gpu`, whose small-triangle size, slices,
+/// tile test and early depth test a GPU gets, and `RasterWork::Cpu`, a CPU driver's, without the
+/// early test on the 64-bit path), whatever the device.
 fn assert_matches_cpu(scene: &Scene, camera: &Camera, settings: Settings) {
     let width = settings.width;
     let ds = double_sided_triangles(scene);

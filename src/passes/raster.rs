@@ -160,7 +160,8 @@ pub(crate) struct Rasterizer {
     int64: bool,
     /// How the work is shared out (resolved: `Gpu` or `Cpu`).
     work: RasterWork,
-    /// The 64-bit path's early depth test (the device loads 64-bit atomics).
+    /// The 64-bit path's early depth test: for GPU work, where the device loads 64-bit atomics
+    /// ([`RasterWork::Cpu`] says why not for a CPU driver).
     early_test: bool,
     /// Bin counters and diagnostics ([`RasterCounters`]).
     bins: wgpu::Buffer,
@@ -176,10 +177,12 @@ impl Rasterizer {
     /// work.
     pub(crate) fn new(device: &wgpu::Device, int64: bool, work: RasterWork) -> Self {
         let storage = |label, size, usage| gpu::storage_buffer(device, label, size, usage);
+        let work = resolve_work(work, device);
         Rasterizer {
             int64,
-            work: resolve_work(work, device),
+            work,
             early_test: int64
+                && work == RasterWork::Gpu
                 && device.features().contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
             bins: storage(
                 "deep-gbuffer.raster.bins",
