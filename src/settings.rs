@@ -230,13 +230,13 @@ pub enum RasterWork {
     /// For a GPU, which runs thousands of threads and skips a branch no thread of a wave takes:
     /// triangles up to 16 pixels across drawn by their own thread, a binned triangle spread at 8
     /// of its 16x16 tiles a workgroup, tiles wholly outside it skipped before the exact test,
-    /// and on the 64-bit path the early depth test (a load of the word before the atomic, which
-    /// spares the atomic where the fragment cannot win).
+    /// and the early depth test (a load of the word before the atomic, which spares the atomic
+    /// where the fragment cannot win; on the 64-bit path where the device loads 64-bit atomics).
     Gpu,
     /// For a CPU driver, which runs a few threads and every branch: up to 64 pixels by one
     /// thread, 64 tiles a workgroup, no tile test (it would cost every pixel and skip none), and
-    /// no early depth test on the 64-bit path (such a driver reads a storage buffer lane by
-    /// lane, so the load costs about what the atomic it spares does).
+    /// no early depth test (such a driver reads a storage buffer lane by lane, so the load costs
+    /// about what the atomic it spares does).
     Cpu,
 }
 

@@ -60,7 +60,7 @@ fn mismatches(gpu: &[u64], cpu: &[u64], width: u32) -> (usize, String) {
 /// Both layers of `scene` from `camera`: the GPU's must equal the CPU reference's bit for bit,
 /// with the work shared out both ways (`RasterWork::Gpu`, whose small-triangle size, slices,
 /// tile test and early depth test a GPU gets, and `RasterWork::Cpu`, a CPU driver's, without the
-/// early test on the 64-bit path), whatever the device.
+/// early test), whatever the device.
 fn assert_matches_cpu(scene: &Scene, camera: &Camera, settings: Settings) {
     let width = settings.width;
     let ds = double_sided_triangles(scene);
@@ -421,13 +421,17 @@ fn int32_path_gives_identical_visibility_buffers() {
             "this test compares the two paths and needs a device with 64-bit atomics (lavapipe has them)"
         );
     }
-    for (scene, camera) in [(&scene, &camera), (&soup_scene, &soup_camera)] {
-        let a = render(scene, camera, Settings { atomics: AtomicPath::Int64, ..settings(80, 60) });
-        let b = render(scene, camera, Settings { atomics: AtomicPath::Int32, ..settings(80, 60) });
-        assert_eq!(a.renderer.raster_path(), "int64");
-        assert_eq!(b.renderer.raster_path(), "int32");
-        assert_eq!(a.vis0, b.vis0);
-        assert_eq!(a.vis1, b.vis1);
+    // Each path with and without its early depth test (a GPU's work has it, a CPU driver's not).
+    for raster_work in [RasterWork::Gpu, RasterWork::Cpu] {
+        for (scene, camera) in [(&scene, &camera), (&soup_scene, &soup_camera)] {
+            let at = |atomics| Settings { atomics, raster_work, ..settings(80, 60) };
+            let a = render(scene, camera, at(AtomicPath::Int64));
+            let b = render(scene, camera, at(AtomicPath::Int32));
+            assert_eq!(a.renderer.raster_path(), "int64");
+            assert_eq!(b.renderer.raster_path(), "int32");
+            assert_eq!(a.vis0, b.vis0, "{raster_work:?}");
+            assert_eq!(a.vis1, b.vis1, "{raster_work:?}");
+        }
     }
 }
 

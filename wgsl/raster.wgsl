@@ -14,9 +14,10 @@
 //   (a screen-filling triangle costs about its pixels, spread over many workgroups), and no
 //   thread repeats the set-up.
 //
-// The early depth test: a fragment first reads the word it would lower and skips the atomic when
-// it cannot win (words only decrease, so the result is the same). It needs a plain atomic load:
-// always there on the 32-bit path, with EARLY_TEST (64-bit atomic loads) on the 64-bit one.
+// The early depth test (EARLY_TEST): a fragment first reads the word it would lower and skips the
+// atomic when it cannot win (words only decrease, so the result is the same). A GPU's work has it
+// (on the 64-bit path where the device loads 64-bit atomics); a CPU driver, which reads a storage
+// buffer lane by lane, goes straight to the atomic (src/settings.rs, `RasterWork`).
 //
 // Coverage is exact: pixel centres are tested with integer edge functions (exact 64-bit for
 // large triangles) and the top-left rule, so adjacent triangles neither crack nor overlap.

@@ -160,8 +160,8 @@ pub(crate) struct Rasterizer {
     int64: bool,
     /// How the work is shared out (resolved: `Gpu` or `Cpu`).
     work: RasterWork,
-    /// The 64-bit path's early depth test: for GPU work, where the device loads 64-bit atomics
-    /// ([`RasterWork::Cpu`] says why not for a CPU driver).
+    /// The early depth test: for GPU work (on the 64-bit path where the device loads 64-bit
+    /// atomics; [`RasterWork::Cpu`] says why not for a CPU driver).
     early_test: bool,
     /// Bin counters and diagnostics ([`RasterCounters`]).
     bins: wgpu::Buffer,
@@ -181,9 +181,9 @@ impl Rasterizer {
         Rasterizer {
             int64,
             work,
-            early_test: int64
-                && work == RasterWork::Gpu
-                && device.features().contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
+            early_test: work == RasterWork::Gpu
+                && (!int64
+                    || device.features().contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS)),
             bins: storage(
                 "deep-gbuffer.raster.bins",
                 std::mem::size_of::<RasterCounters>() as u64,
@@ -260,11 +260,11 @@ impl Rasterizer {
             defines = mode.defines();
             if self.int64 {
                 defines.push("INT64");
-                if self.early_test {
-                    defines.push("EARLY_TEST");
-                }
             } else if depth_phase {
                 defines.push("DEPTH_PHASE");
+            }
+            if self.early_test {
+                defines.push("EARLY_TEST");
             }
             let get = |entry| pipelines.get(device, "raster", entry, &defines, &constants);
             get("raster_small").dispatch(device, pass, &entries, groups);

@@ -3,9 +3,9 @@
 // f32 view depth, positive, so its bits order like the value; the empty pixel is all ones.
 // With INT64 the word is updated by one 64-bit atomicMin; without it by two passes over 32-bit
 // atomics: DEPTH_PHASE takes the minimum depth, then the id phase the minimum id at that depth.
-// Both give the same words. Each write first reads the word and leaves when it cannot lower it
-// (the early depth test; on the 64-bit path only with EARLY_TEST, which needs 64-bit atomic
-// loads): words only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage
+// Both give the same words. With EARLY_TEST each write first reads the word and leaves when it
+// cannot lower it (the early depth test; the id phase always reads the depth it matches): words
+// only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage
 // pointers to functions, so the writes name the bindings `vis0` and `vis1` (declared under
 // WRITE_L0 and WRITE_L1 by the including kernel), and each has its own copy.
 
@@ -45,9 +45,13 @@ alias VisWord = atomic<u32>;
 #if WRITE_L0
 fn vis0_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
+#if EARLY_TEST
     if atomicLoad(&vis0[2u * p + 1u]) > bitcast<u32>(depth) {
         atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
     }
+#else
+    atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
+#endif
 #else
     if atomicLoad(&vis0[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis0[2u * p], id);
@@ -58,9 +62,13 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 #if WRITE_L1
 fn vis1_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
+#if EARLY_TEST
     if atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth) {
         atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
     }
+#else
+    atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
+#endif
 #else
     if atomicLoad(&vis1[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis1[2u * p], id);
