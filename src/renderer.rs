@@ -582,7 +582,7 @@ impl Renderer {
     /// last frame (the host measured it: `deep-gbuffer render` waits until the mean irradiance
     /// over four frames differs by less than 0.5% from the four before). From the next frame
     /// that shows the same view the radiosity's temporal filter keeps the mean of the frames
-    /// since, as it would after
+    /// since, as it would after the
     /// [`RadiositySettings::settle_frames`](crate::RadiositySettings::settle_frames) still frames
     /// (a bound for any scene, 112 with the defaults): the gather's noise, which the turned
     /// slices make different every frame, then falls as one over the square root of the frames,

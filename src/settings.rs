@@ -491,12 +491,12 @@ pub struct RadiositySettings {
     /// Weight in [0, 1) of the history in the temporal filter while the view stands still,
     /// until its bounces settle. Each frame carries the next bounce a step further, leaving
     /// `c = a + (1 - a) feedback_gain` of the way to the fixed point (0.94 at 0.7, against
-    /// 0.97 at 0.85, the weight a still view took before, and 0.98 at `alpha`'s 0.9), so a lower weight reaches the multi-bounce light in fewer frames
-    /// for more of each frame's noise (`sqrt((1 - a) / (1 + a))` of one frame's, which the
-    /// average after settling removes): at 0.7 the 32nd still frame of 2CylinderEngine reads
-    /// 0.90 of the ten-bounce truth against 0.81 at 0.85, and its frame-to-frame change is
-    /// about twice as large (README, *A still view's faster filter*). `alpha` itself: no
-    /// change when the view stops.
+    /// 0.97 at 0.85, the weight a still view took before, and 0.98 at `alpha`'s 0.9), so a
+    /// lower weight reaches the multi-bounce light in fewer frames for more of each frame's
+    /// noise (`sqrt((1 - a) / (1 + a))` of one frame's, which the average after settling
+    /// removes): at 0.7 the 32nd still frame of 2CylinderEngine reads 0.90 of the ten-bounce
+    /// truth against 0.81 at 0.85, and its frame-to-frame change is about twice as large
+    /// (README, *A still view's faster filter*). `alpha` itself: no change when the view stops.
     pub still_alpha: f32,
     /// History is kept where the previous layer 0 (whose irradiance the history holds) lies
     /// within this distance (scene units, along the previous view axis) of the point's surface

@@ -5,9 +5,9 @@
 // atomics: DEPTH_PHASE takes the minimum depth, then the id phase the minimum id at that depth.
 // Both give the same words. With EARLY_TEST each write first reads the word and leaves when it
 // cannot lower it (the early depth test; the id phase always reads the depth it matches): words
-// only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage
-// pointers to functions, so the writes name the bindings `vis0` and `vis1` (declared under
-// WRITE_L0 and WRITE_L1 by the including kernel), and each has its own copy.
+// only decrease, so skipping the atomic changes nothing. WGSL cannot pass storage pointers to
+// functions, so the writes name the bindings `vis0` and `vis1` (declared under WRITE_L0 and
+// WRITE_L1 by the including kernel), and each has its own copy.
 
 const VIS_EMPTY: u32 = 0xffffffffu;
 
