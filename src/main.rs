@@ -369,7 +369,7 @@ struct RadiosityArgs {
     #[arg(long)]
     radiosity_layer1_samples: Option<u32>,
     /// Weight of the slices gather's extrapolation from every other step, 0 to 2 (0: none)
-    /// [default: 1].
+    /// [default: 0.6].
     #[arg(long)]
     radiosity_extrapolation: Option<f32>,
     /// A radiosity tap h pixels away reads level floor(log2 h) - this of the gather source,
@@ -395,8 +395,7 @@ struct RadiosityArgs {
     radiosity_still_alpha: Option<f32>,
     /// Take a surface's outgoing light only where it faces the gathering point; a slices
     /// gather takes what a surface facing away sends from its far side, its emission and the
-    /// indirect light it reflects, and over the directions a point's solid hides beyond its own
-    /// patch of surface that point's light relit for a surface facing the gathering point (see
+    /// indirect light it reflects, and from a curved surface the side the point sees (see
     /// `RadiositySettings::normal_test`) [default: on].
     #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
     radiosity_normal_test: Option<bool>,

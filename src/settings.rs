@@ -509,12 +509,11 @@ pub struct RadiositySettings {
     /// emission and the indirect light it reflects (none on the first frame, and none from
     /// layer 1 without its gather, [`layer1_samples`](Self::layer1_samples)), not its direct
     /// light (a sphere lit from above, seen from the ground beside it, shows the ground its dark
-    /// side). With it, a `slices` point sends its light only over its own patch of surface
-    /// (halfway to the steps beside it), and the rest of the directions its solid hides, the
-    /// solid's far side as the gathering point sees it, take that light relit for a surface
-    /// facing the gathering point by the direction the point's direct light comes from
-    /// (`wgsl/radiosity.wgsl`, *A point's own surface and the far side of its solid*). Off,
-    /// every surface sends its visible side's light both ways over its whole solid.
+    /// side). With it, `slices` also lets a curved surface send the side the gathering point
+    /// sees: a point facing it less squarely than the point before it on one bending surface
+    /// sends that point's light, and a point starting a surface at a grazing angle, on a surface
+    /// that bends away, blends towards its far side's light (`wgsl/radiosity.wgsl`, *Curved
+    /// surfaces*). Off, every surface sends its visible side's light both ways.
     pub normal_test: bool,
     /// Radius of the bilateral blur after the temporal filter, in pixels (0: none).
     pub blur_radius: u32,
@@ -545,10 +544,8 @@ pub struct RadiositySettings {
     /// `E + k (E - E_half)` and `c + k (c - c_half)`, the halves what every other step alone
     /// finds, as the obscurance's ([`AoSettings::extrapolation`]). Steps spaced apart leave
     /// open the directions of what stands between them (an engine's fins between two steps
-    /// that land beyond them), so the light found grows with the steps, its shortfall about
-    /// halving as they double (2CylinderEngine's first frame without it: 0.70, 0.86, 0.96 of
-    /// the truth at 8, 16 and 32 steps a side); `k = 1 / (2^1 - 1) = 1` removes that first
-    /// order. 0: the plain estimate. 0 to 2.
+    /// that land beyond them), so the light found grows with the steps; 0.6 takes the
+    /// obscurance's order of convergence. 0: the plain estimate. 0 to 2.
     pub extrapolation: f32,
     /// Add the light of the surfaces that neither layer holds, as each shadow-casting light's
     /// reflective shadow map sees them (`wgsl/offscreen.wgsl`): the ceiling around a light above
@@ -657,7 +654,7 @@ impl Default for RadiositySettings {
             mip_offset: 4,
             downsample: 1,
             layer1_samples: 8,
-            extrapolation: 1.0,
+            extrapolation: 0.6,
             offscreen: true,
             history_slices: 1,
         }

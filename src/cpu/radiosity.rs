@@ -5,14 +5,12 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
-use crate::cpu::direct::light_at;
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel, rotated_grid};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs, step_distance};
 use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap_turned};
 use crate::frame::{FrameUniform, PyramidLayout, RadiosityUniform, SourceTexel};
 use crate::gbuffer::GSample;
-use crate::scene::GpuLight;
 use crate::settings::Boost;
 
 /// boost(rho) of `wgsl/radiosity.wgsl`.
@@ -57,18 +55,15 @@ pub fn feedback_without_history(
 /// The gather source of `radiosity_feedback` and `radiosity_source_level` for a frame without
 /// history: both layers' view depths, view-space normals (of `f`'s view) and B (`b`) at every
 /// pixel (H, what a surface's far side sends, is its emission and the indirect light it
-/// reflects: none yet), the direction of layer 0's direct light from `lights`
-/// ([`light_direction`]), and the rotated-grid levels of `layout` above them.
+/// reflects: none yet), and the rotated-grid levels of `layout` above them.
 pub fn source(
     f: &FrameUniform,
     layers: [&[GSample]; 2],
     b: [&[Vec3]; 2],
-    lights: &[GpuLight],
     layout: &PyramidLayout,
 ) -> Vec<SourceTexel> {
     let base: Vec<SourceTexel> = (0..layers[0].len())
         .map(|p| {
-            let at = Vec2::new((p as u32 % f.width) as f32, (p as u32 / f.width) as f32) + 0.5;
             let [s0, s1] = [&layers[0][p], &layers[1][p]];
             let normal = |s: &GSample| {
                 let n = mat_mul(&f.view, s.normal.extend(0.0).to_array()).xyz();
@@ -79,7 +74,6 @@ pub fn source(
                 [normal(s0), normal(s1)],
                 [b[0][p], b[1][p]],
                 [s0, s1].map(|s| if s.depth > 0.0 { s.emissive } else { Vec3::ZERO }),
-                light_direction(f, s0, at, lights),
             )
         })
         .collect();
@@ -170,62 +164,47 @@ pub fn gather(
 /// `FACING_SLACK` of `wgsl/radiosity.wgsl`.
 const FACING_SLACK: f32 = 1e-3;
 
-/// `RELIGHT_FLOOR` of `wgsl/radiosity.wgsl`.
-const RELIGHT_FLOOR: f32 = 0.1;
+/// `BEND_COS`, `GRAZING` and `BEND_REACH` of `wgsl/radiosity.wgsl` (curved surfaces).
+const BEND_COS: f32 = 0.95;
+const GRAZING: f32 = 0.3;
+const BEND_REACH: f32 = 0.5;
 
-/// Rec. 709 luminance weights, as `light_direction` weighs the lights.
-const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
-
-/// As `light_direction`: the view-space direction the direct light on `s` at pixel position `p`
-/// comes from, the lights' directions weighted by the luminance of the irradiance each
-/// delivers on its normal, unshadowed (zero where none reaches it).
-pub fn light_direction(f: &FrameUniform, s: &GSample, p: Vec2, lights: &[GpuLight]) -> Vec3 {
-    if s.depth.is_nan() || s.depth <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let world = mat_mul(&f.inv_view, view_position(f, p, s.depth).extend(1.0).to_array()).xyz();
-    let sum: Vec3 = lights
-        .iter()
-        .map(|light| {
-            let (e, l) = light_at(light, world);
-            e.dot(LUMA) * s.normal.dot(l).max(0.0) * l
-        })
-        .sum();
-    let d = mat_mul(&f.view, sum.extend(0.0).to_array()).xyz();
-    if d.length_squared() > 0.0 && d.is_finite() { d.normalize() } else { Vec3::ZERO }
+/// As `Sender`: the last layer-0 point that hid sectors on a side of a slice, what it sent,
+/// where it lies, its normal and the cosine at which it faces the receiver.
+struct Sender {
+    light: Vec3,
+    y: Vec3,
+    n: Vec3,
+    facing: f32,
 }
 
-/// As `on_plane`: where the ray through pixel position `p` meets the plane through `y` with
-/// normal `ny` (view space), its view depth held within a factor 2 of `z0`.
-fn on_plane(f: &FrameUniform, p: Vec2, y: Vec3, ny: Vec3, z0: f32) -> Vec3 {
-    let mut z = z0;
-    if f.ortho != 0 {
-        let o = view_position(f, p, 0.0);
-        if ny.z.abs() > 1e-6 {
-            z = (o - y).dot(ny) / ny.z;
-        }
-    } else {
-        let q = view_position(f, p, 1.0);
-        let den = q.dot(ny);
-        if den.abs() > 1e-6 {
-            z = y.dot(ny) / den;
-        }
-    }
-    if z.is_nan() || z <= 0.0 {
-        z = z0;
-    }
-    view_position(f, p, z.clamp(0.5 * z0, 2.0 * z0))
+/// As `Grazing`: a layer-0 point that starts a surface and faces the receiver at a grazing
+/// angle, whose light waits for the next step's point.
+struct Grazing {
+    b: Vec3,
+    h: Vec3,
+    facing: f32,
+    count: u32,
+    count_half: u32,
+    y: Vec3,
+    n: Vec3,
 }
 
-/// As `far_side_light`: what the far side of the layer-0 solid of texel `t` (its point `y`,
-/// normal `ny`) sends towards `c`: H plus the rest of B relit for a surface facing `c` by the
-/// texel's light direction, at most B.
-fn far_side_light(t: &SourceTexel, c: Vec3, y: Vec3, ny: Vec3) -> Vec3 {
-    let h = t.hidden(0);
-    let l = t.light();
-    let toward = (c - y).normalize().dot(l).max(0.0);
-    let relit = (toward / ny.dot(l).max(RELIGHT_FLOOR)).min(1.0);
-    h + (t.radiance(0) - h).max(Vec3::ZERO) * relit
+impl Grazing {
+    /// As `grazing_light`: what it sends towards the receiver `c`, the next step finding the
+    /// layer-0 point and normal `next` (`None`: no point).
+    fn light(&self, c: Vec3, next: Option<(Vec3, Vec3)>) -> Vec3 {
+        let Some((y2, n2)) = next else {
+            return self.b;
+        };
+        let away = n2.dot(c - y2) / (c - y2).length().max(1e-30) < self.facing;
+        let turn = (n2 - self.n).length();
+        if away && turn * (c - self.y).length() > BEND_REACH * (y2 - self.y).length().max(1e-6) {
+            let s = self.facing.max(0.0) / GRAZING;
+            return self.h * (1.0 - s) + self.b * s;
+        }
+        self.b
+    }
 }
 
 /// As `Gathered`: the sectors a slice's steps have hidden and the light they sent, every
@@ -317,6 +296,8 @@ impl Gather<'_> {
             for side in [1.0, -1.0] {
                 let spacing = sl.spacing(f, (x, y_px), side, r_px, steps);
                 let coarsest = mip_coarsest(spacing, self.layout);
+                let mut last: Option<Sender> = None;
+                let mut grazing: Option<Grazing> = None;
                 for j in 0..steps {
                     let h = step_distance(spacing, j, steps, noise.1);
                     let even = j % 2 == 0;
@@ -326,55 +307,61 @@ impl Gather<'_> {
                         .map(|tap| mip_texel(self.layout, tap, level))
                         .map(|(q, at)| (&self.source[q], at))
                         .filter(|(t, _)| t.depth(0) > 0.0);
+                    let point = found
+                        .filter(|_| u.normal_test != 0)
+                        .map(|(t, at)| (view_position(f, at, t.depth(0)), t.normal(0)));
+                    if let Some(g) = grazing.take() {
+                        let light = g.light(c, point);
+                        send(&mut every, &mut half, light, g.count, g.count_half);
+                        if let Some(l) = last.as_mut() {
+                            l.light = light;
+                        }
+                    }
                     let Some((t, at)) = found else {
                         continue;
                     };
                     let (z0, z1) = (t.depth(0), t.depth(1));
                     let (back0, back1) = solid_backs(z0, z1, u.thickness);
                     let (bits, _) = sl.solid_sectors(f, c, n, at, side, z0, back0, 0.0, u.radius);
-                    if bits != 0 && u.normal_test != 0 {
-                        // The point's own patch and the far side of its solid.
-                        let y = view_position(f, at, z0);
-                        let ny = t.normal(0);
-                        let texel = 0.5 * (1u32 << level) as f32;
-                        let distance = |i: i64| {
-                            if i < 0 {
-                                0.0
-                            } else {
-                                step_distance(spacing, i as u32, steps, noise.1)
+                    let first = every.first(bits);
+                    let first_half = if even { half.first(bits) } else { 0 };
+                    match point {
+                        _ if bits == 0 => {}
+                        None => send(&mut every, &mut half, t.radiance(0), first, first_half),
+                        Some((y, ny)) => {
+                            // The rules for curved surfaces.
+                            let d = c - y;
+                            let reach = d.length();
+                            let mut light = self.sent_towards(t, 0, ny, d, reach);
+                            let mut facing = ny.dot(d) / reach.max(1e-30);
+                            let joined = last
+                                .as_ref()
+                                .filter(|l| (y - l.y).length_squared() < reach * reach);
+                            match joined {
+                                Some(l) if ny.dot(l.n) < BEND_COS && l.facing > facing => {
+                                    (light, facing) = (l.light, l.facing);
+                                }
+                                None if facing < GRAZING => {
+                                    let (b, h) = (light, t.hidden(0));
+                                    grazing = Some(Grazing {
+                                        b,
+                                        h,
+                                        facing,
+                                        count: first,
+                                        count_half: first_half,
+                                        y,
+                                        n: ny,
+                                    });
+                                }
+                                _ => {}
                             }
-                        };
-                        let patch = |apart: i64| {
-                            let before = (0.5 * (h - distance(j as i64 - apart))).max(texel);
-                            let after = (0.5 * (distance(j as i64 + apart) - h)).max(texel);
-                            let a = on_plane(f, at - side * before * sl.dir, y, ny, z0);
-                            let b = on_plane(f, at + side * after * sl.dir, y, ny, z0);
-                            sl.sectors_between(c, a, b, side)
-                        };
-                        let own = patch(1);
-                        let own_half = if even { patch(2) } else { 0 };
-                        let (all, all_half) = (bits | own, bits | own_half);
-                        let first = every.first(all);
-                        let first_half = if even { half.first(all_half) } else { 0 };
-                        let mine = every.first(own);
-                        let mine_half = if even { half.first(own_half) } else { 0 };
-                        let d = c - y;
-                        let light = self.sent_towards(t, 0, ny, d, d.length());
-                        send(&mut every, &mut half, light, mine, mine_half);
-                        if first + first_half > mine + mine_half {
-                            let far = far_side_light(t, c, y, ny);
-                            send(&mut every, &mut half, far, first - mine, first_half - mine_half);
+                            last = Some(Sender { light, y, n: ny, facing });
+                            if grazing.is_none() {
+                                send(&mut every, &mut half, light, first, first_half);
+                            }
                         }
-                        every.occupied |= all;
-                        if even {
-                            half.occupied |= all_half;
-                        }
-                    } else if bits != 0 {
-                        let first = every.first(bits);
-                        let first_half = if even { half.first(bits) } else { 0 };
-                        send(&mut every, &mut half, t.radiance(0), first, first_half);
-                        occupy(&mut every, &mut half, bits, even);
                     }
+                    occupy(&mut every, &mut half, bits, even);
                     if z1 > z0 {
                         let (bits, _) =
                             sl.solid_sectors(f, c, n, at, side, z1, back1, 0.0, u.radius);
@@ -385,6 +372,10 @@ impl Gather<'_> {
                         occupy(&mut every, &mut half, bits, even);
                     }
                 }
+                // A grazing point with no step after it: nothing tells that its surface bends.
+                if let Some(g) = grazing {
+                    send(&mut every, &mut half, g.b, g.count, g.count_half);
+                }
             }
             // Richardson's extrapolation in the steps a side.
             let k = u.extrapolation;
@@ -394,9 +385,7 @@ impl Gather<'_> {
                 / SECTORS as f32;
             covered += sl.weight * (hidden + k * (hidden - hidden_half)).max(0.0) / SECTORS as f32;
         }
-        // As the kernel: an extrapolated coverage past the whole hemisphere is the whole.
-        let c = covered / slices as f32;
-        (PI * seen / slices as f32 / c.max(1.0)).extend(c.min(1.0))
+        (PI * seen / slices as f32).extend((covered / slices as f32).min(1.0))
     }
 }
 

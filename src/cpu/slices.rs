@@ -164,12 +164,6 @@ impl Slice {
         ones << first as u32
     }
 
-    /// As `sector_bits` of `weight_in` of `a - c` and `b - c`: the sectors between the
-    /// directions from `c` to the view-space points `a` and `b` on `side` (+-1).
-    pub fn sectors_between(&self, c: Vec3, a: Vec3, b: Vec3, side: f32) -> u32 {
-        self.bits(self.weight(a - c, side), self.weight(b - c, side))
-    }
-
     /// As `solid_sectors`: the sectors the solid of a point hides, and the squared distance
     /// from `c` to the point (not lowered).
     #[allow(clippy::too_many_arguments, reason = "the WGSL function's arguments, in its order")]

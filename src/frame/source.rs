@@ -1,8 +1,7 @@
-//! The radiosity's gather source: one 40-byte texel per pixel (and per texel of its MIP levels)
+//! The radiosity's gather source: one 32-byte texel per pixel (and per texel of its MIP levels)
 //! holding what a gather tap reads: both layers' view depths, outgoing radiance B, view-space
-//! normals and the radiance H of each surface's far side, and the direction layer 0's direct
-//! light comes from, the radiances in RGB9E5 (`wgsl/shared/rgb9e5.wgsl`), the directions
-//! octahedral in 2x16 snorm.
+//! normals and the radiance H of each surface's far side, the radiances in RGB9E5
+//! (`wgsl/shared/rgb9e5.wgsl`), the normals octahedral in 2x16 snorm.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
@@ -73,44 +72,25 @@ pub struct SourceTexel {
     /// that does not depend on which way the surface faces (its emission and the indirect light
     /// it reflects).
     pub hidden: [u32; 2],
-    /// The direction layer 0's direct light comes from, in view space ([`pack_normal`] of the
-    /// lights' directions weighted by the luminance each delivers on its normal, unshadowed; 0
-    /// where none reaches it): it relights the far side of the point's solid for the gather.
-    pub light: u32,
-    pub _pad: u32,
 }
 
 crate::frame::mirrored!(
     SourceTexel,
     "radiosity.wgsl",
     "SourceTexel",
-    [depth, radiance, normal, hidden, light]
+    [depth, radiance, normal, hidden]
 );
 
 impl SourceTexel {
     /// The texel of a pixel whose layers lie at view depths `depth`, face along the view-space
-    /// `normal`s and send `radiance` (their far sides `hidden`), layer 0's direct light coming
-    /// from the direction `light` (zero: none).
-    pub fn new(
-        depth: [f32; 2],
-        normal: [Vec3; 2],
-        radiance: [Vec3; 2],
-        hidden: [Vec3; 2],
-        light: Vec3,
-    ) -> Self {
+    /// `normal`s and send `radiance` (their far sides `hidden`).
+    pub fn new(depth: [f32; 2], normal: [Vec3; 2], radiance: [Vec3; 2], hidden: [Vec3; 2]) -> Self {
         SourceTexel {
             depth: depth.map(f32::to_bits),
             radiance: radiance.map(pack_rgb9e5),
             normal: normal.map(pack_normal),
             hidden: hidden.map(pack_rgb9e5),
-            light: pack_normal(light),
-            _pad: 0,
         }
-    }
-
-    /// The direction layer 0's direct light comes from (view space; +z where there is none).
-    pub fn light(&self) -> Vec3 {
-        oct_decode(unpack2x16snorm(self.light))
     }
 
     /// The view-space normal of `layer` (meaningless where its depth is 0).

@@ -207,7 +207,6 @@ impl Stage for RadiosityStage {
             (slot::RAW, &self.gathered),
             (slot::HISTORY_IN, history_in),
             (slot::PREV_VIS0, ctx.raster.previous_vis0()),
-            (slot::LIGHTS, ctx.scene.light_buffer()),
             // Only the passes that use the layer-1 gather read or write it; the blur's
             // scratch (unused here) stands in for it elsewhere.
             (slot::LAYER1_GATHERED, self.layer1.as_ref().map_or(&self.scratch, |l| &l.records)),
