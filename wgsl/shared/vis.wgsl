@@ -46,12 +46,11 @@ alias VisWord = atomic<u32>;
 fn vis0_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
 #if EARLY_TEST
-    if atomicLoad(&vis0[2u * p + 1u]) > bitcast<u32>(depth) {
-        atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
+    if atomicLoad(&vis0[2u * p + 1u]) <= bitcast<u32>(depth) {
+        return;
     }
-#else
-    atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
 #endif
+    atomicMin(&vis0[2u * p + 1u], bitcast<u32>(depth));
 #else
     if atomicLoad(&vis0[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis0[2u * p], id);
@@ -63,12 +62,11 @@ fn vis0_write(p: u32, depth: f32, id: u32) {
 fn vis1_write(p: u32, depth: f32, id: u32) {
 #if DEPTH_PHASE
 #if EARLY_TEST
-    if atomicLoad(&vis1[2u * p + 1u]) > bitcast<u32>(depth) {
-        atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
+    if atomicLoad(&vis1[2u * p + 1u]) <= bitcast<u32>(depth) {
+        return;
     }
-#else
-    atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
 #endif
+    atomicMin(&vis1[2u * p + 1u], bitcast<u32>(depth));
 #else
     if atomicLoad(&vis1[2u * p + 1u]) == bitcast<u32>(depth) {
         atomicMin(&vis1[2u * p], id);
