@@ -288,7 +288,9 @@ pub struct AoSettings {
     /// `false` reads layer 0 only.
     pub two_layers: bool,
     /// Radius of the bilateral blur in pixels (0: no blur). It removes the pattern of the
-    /// slices' turns and also averages each pixel with neighbours whose obscurance differs, so
+    /// slices' turns and keeps to each surface (depth, normal, and within a pixel's footprint
+    /// of the centre's tangent plane), but also averages each pixel with neighbours on its
+    /// surface whose obscurance differs, so
     /// more slices (a finer pattern) want a narrower blur: 4 on 2 slices, 3 on 4 (the `High`
     /// preset), 2 at 128 taps on 4 slices measured lowest on a dense scene (README, *`high`
     /// re-picked*).

@@ -71,9 +71,11 @@ fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
     }
 
     // The blur, from the GPU's own raw AV, against the CPU blur.
+    let plane = Some(&r.frame);
+    let samples = &layers[0].samples;
     let horizontal =
-        cpu_blur::blur(w, h, ao.blur_radius, false, &layers[0].samples, &raw[..(w * h) as usize]);
-    let blurred = cpu_blur::blur(w, h, ao.blur_radius, true, &layers[0].samples, &horizontal);
+        cpu_blur::blur((w, h), ao.blur_radius, false, plane, samples, &raw[..(w * h) as usize]);
+    let blurred = cpu_blur::blur((w, h), ao.blur_radius, true, plane, samples, &horizontal);
     let actual = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
     for (p, (a, b)) in actual.iter().zip(&blurred).enumerate() {
         // exp() and the weighted sum differ by f32 rounding only.

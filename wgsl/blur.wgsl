@@ -1,10 +1,12 @@
 // Separable depth- and normal-aware (bilateral) blur of a scalar image (or, with VEC4, of a
 // vec4 image), one direction per dispatch (VERTICAL or not). A tap's weight is a Gaussian of its
 // distance times shared/bilateral.wgsl's depth and normal weight, so nothing bleeds across depth
-// edges or creases; pixels without a surface are skipped. Each tap reads the first word of its
-// G-buffer record alone (depth and normal), not the whole record.
+// edges or creases, and with PLANE (the obscurance) its plane weight too, so that what varies
+// from pixel to pixel with the geometry (a groove's floor against its rim) is not averaged
+// away; pixels without a surface are skipped. Each tap reads the first word of its G-buffer
+// record alone (depth and normal), not the whole record.
 // src/cpu/blur.rs is the same on the CPU.
-// defines: PACKED VERTICAL VEC4
+// defines: PACKED VERTICAL VEC4 PLANE
 
 #include "shared/frame.wgsl"
 #include "shared/gbuffer.wgsl"
@@ -42,6 +44,11 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #endif
     let r = i32(RADIUS);
     let sigma = max(f32(r), 1.0) * 0.5;
+#if PLANE
+    let pc = view_position(frame, vec2<f32>(gid.xy) + 0.5, zc);
+    let nc = mat_mul(frame.view, vec4<f32>(gword_normal(centre), 0.0)).xyz;
+    let footprint = pixel_footprint(frame, zc);
+#endif
     var mean = Mean();
     for (var k = -r; k <= r; k++) {
         let tap = vec2<i32>(gid.xy) + step * k;
@@ -56,7 +63,10 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let fk = f32(k);
         let gauss = exp(-fk * fk / (2.0 * sigma * sigma));
-        let w = gauss * bilateral_weight(z, gword_normal(word), zc, gword_normal(centre));
+        var w = gauss * bilateral_weight(z, gword_normal(word), zc, gword_normal(centre));
+#if PLANE
+        w *= plane_weight(view_position(frame, vec2<f32>(tap) + 0.5, z), pc, nc, footprint);
+#endif
         mean_add(&mean, source[q], w);
     }
     if mean.weight > 0.0 {

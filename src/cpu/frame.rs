@@ -31,6 +31,13 @@ pub fn toward_camera(f: &FrameUniform, world: Vec3) -> Vec3 {
     (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
 }
 
+/// As `pixel_footprint`: the distance between neighbouring pixels' rays at view depth `d` (their
+/// spacing on the image plane for an orthographic camera).
+pub fn pixel_footprint(f: &FrameUniform, d: f32) -> f32 {
+    let spacing = 2.0 / (f.proj[1][1] * f.height as f32);
+    if f.ortho != 0 { spacing } else { spacing * d }
+}
+
 /// As `view_position`: the view-space point at view depth `d` through pixel coordinate `px`.
 pub fn view_position(f: &FrameUniform, px: Vec2, d: f32) -> Vec3 {
     let ndc = Vec2::new(px.x / f.width as f32 * 2.0 - 1.0, 1.0 - px.y / f.height as f32 * 2.0);

@@ -175,7 +175,7 @@ impl Stage for AoStage {
                 self.temporal.record(ctx, &mut pass, [&self.raw, history_in, history_out]);
             }
             PassId::AoBlur => {
-                let blur = Blur { radius: ctx.settings.ao.blur_radius, vec4: false };
+                let blur = Blur { radius: ctx.settings.ao.blur_radius, vec4: false, plane: true };
                 blur.record(ctx, &mut pass, [self.unblurred(), &self.scratch, &self.blurred]);
             }
             other => unreachable!("{other} is not an obscurance pass"),

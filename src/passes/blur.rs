@@ -3,12 +3,15 @@
 use super::FrameContext;
 use crate::gpu::slots::blur as slot;
 
-/// One blur: its radius in pixels (a pipeline constant) and whether it blurs `vec4<f32>`
-/// images (radiosity) or f32 images (obscurance).
+/// One blur: its radius in pixels (a pipeline constant), whether it blurs `vec4<f32>` images
+/// (radiosity) or f32 images (obscurance), and whether a tap is weighed by its distance from the
+/// centre's tangent plane too (`plane_weight`: the obscurance, which varies at the scale of a
+/// pixel where the geometry does; the gathered irradiance varies at the scale of its radius).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Blur {
     pub radius: u32,
     pub vec4: bool,
+    pub plane: bool,
 }
 
 impl Blur {
@@ -22,6 +25,9 @@ impl Blur {
         let mut defines = ctx.settings.precision.defines();
         if self.vec4 {
             defines.push("VEC4");
+        }
+        if self.plane {
+            defines.push("PLANE");
         }
         let radius = [("RADIUS", f64::from(self.radius))];
         for (vertical, (from, to)) in [(false, (source, scratch)), (true, (scratch, target))] {

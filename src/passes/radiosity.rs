@@ -282,7 +282,8 @@ impl Stage for RadiosityStage {
                 self.temporal.record(ctx, &mut pass, [&self.gathered, history_in, history_out]);
             }
             PassId::RadiosityBlur => {
-                let blur = Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true };
+                let blur =
+                    Blur { radius: ctx.settings.radiosity.blur_radius, vec4: true, plane: false };
                 blur.record(ctx, &mut pass, [history_out, &self.scratch, &self.blurred]);
             }
             other => unreachable!("{other} is not a radiosity pass"),

@@ -49,6 +49,13 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
 }
 
+// The distance between neighbouring pixels' rays at view depth d (their spacing on the image
+// plane for an orthographic camera). src/cpu/frame.rs has the same.
+fn pixel_footprint(f: Frame, d: f32) -> f32 {
+    let spacing = 2.0 / (f.proj[1].y * f32(f.height));
+    return select(spacing * d, spacing, f.ortho != 0u);
+}
+
 // The unit world direction from world point `world` towards the camera (its backward axis for an
 // orthographic camera). src/cpu/frame.rs has the same.
 fn toward_camera(f: Frame, world: vec3<f32>) -> vec3<f32> {
