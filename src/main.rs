@@ -318,6 +318,11 @@ struct AoArgs {
     /// filter's history, each with the same steps a side (0: all) [default: 0].
     #[arg(long)]
     ao_history_slices: Option<u32>,
+    /// Frames a still view goes on computing the obscurance, its slices turned each frame,
+    /// keeping their mean under a blur that narrows as the mean grows (0: it keeps its first
+    /// frame's) [default: 16].
+    #[arg(long)]
+    ao_still_frames: Option<u32>,
 }
 
 impl AoArgs {
@@ -332,6 +337,7 @@ impl AoArgs {
         ao.downsample = self.ao_downsample.unwrap_or(ao.downsample);
         ao.alpha = self.ao_alpha.unwrap_or(ao.alpha);
         ao.history_slices = self.ao_history_slices.unwrap_or(ao.history_slices);
+        ao.still_frames = self.ao_still_frames.unwrap_or(ao.still_frames);
         ao.blur_radius = self.ao_blur_radius.unwrap_or(ao.blur_radius);
         if self.ao_one_layer {
             ao.two_layers = false;

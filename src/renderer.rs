@@ -330,7 +330,8 @@ pub struct Renderer {
 struct StillKey {
     /// The frame constants (the camera, the last frame's camera, the image, the flags).
     uniform: FrameUniform,
-    /// The names of the frame's passes, drawn or kept, shadow maps aside, sorted.
+    /// The names of the frame's passes, drawn or kept, shadow maps and `ao.temporal` aside,
+    /// sorted.
     passes: Vec<String>,
     /// The scene's buffers ([`SceneBuffers::identity`]).
     scene: [wgpu::Buffer; 6],
@@ -344,7 +345,8 @@ impl StillKey {
             .passes
             .iter()
             .chain(&plan.reused)
-            .filter(|p| !matches!(p, PassId::Shadow { .. }))
+            // A still view's frames add the obscurance's mean (`ao.temporal`) to the plan.
+            .filter(|p| !matches!(p, PassId::Shadow { .. } | PassId::AoTemporal))
             .map(|p| p.name().into_owned())
             .collect();
         passes.sort();
@@ -680,8 +682,15 @@ impl Renderer {
             plan.reused = kept;
         }
         if !provided && self.is_still(scene, camera, &plan) {
-            // The obscurance's temporal filter goes on averaging turned slices for a while.
+            // The obscurance goes on averaging turned slices for a while, with the temporal
+            // filter or, without it, in a mean of the still frames alone.
             let ao = self.settings.ao.runs_when_still(self.still_frames + 1);
+            if ao
+                && !plan.contains(&PassId::AoTemporal)
+                && let Some(i) = plan.passes.iter().position(|p| *p == PassId::Ao)
+            {
+                plan.passes.insert(i + 1, PassId::AoTemporal);
+            }
             let (kept, run): (Vec<PassId>, Vec<PassId>) = plan.passes.into_iter().partition(|p| {
                 p.same_when_still()
                     && !(ao && matches!(p, PassId::Ao | PassId::AoTemporal | PassId::AoBlur))
@@ -900,7 +909,8 @@ impl Renderer {
         }
         if let Some(ao) = st.ao.as_mut() {
             if plan.contains(&PassId::Ao) {
-                ao.prepare(queue, s, self.history.is_some(), self.still_frames);
+                let filters = plan.contains(&PassId::AoTemporal);
+                ao.prepare(queue, s, (self.history.is_some(), filters), self.still_frames);
             } else if !plan.reused.contains(&PassId::Ao) {
                 ao.skipped();
             }

@@ -304,7 +304,8 @@ pub struct AoSettings {
     /// normal-aware upsample (`wgsl/upsample.wgsl`).
     pub downsample: u32,
     /// Weight alpha in [0, 1) of the history in the obscurance's temporal filter
-    /// (`wgsl/temporal.wgsl`, `ao.temporal`); 0: no filter, each frame's AV alone. With it the
+    /// (`wgsl/temporal.wgsl`, `ao.temporal`); 0: no filter, each frame of a moving view alone (a
+    /// still view still averages its frames: [`still_frames`](Self::still_frames)). With it the
     /// slices (`horizon`, `bitmask`) turn every frame, and the filter averages what each frame's
     /// directions found at the same surface point over about `(1 + alpha) / (1 - alpha)` frames.
     pub alpha: f32,
@@ -316,11 +317,13 @@ pub struct AoSettings {
     /// How far (view depth, scene units) the previous frame's layer 0 may lie from a point's
     /// surface for the point to keep its history (scaled with the scene, as the radius is).
     pub history_tolerance: f32,
-    /// Frames a still view goes on computing the obscurance with the temporal filter, each
-    /// weighed as one of the mean of the frames since the view stood still, before it keeps
-    /// the result (as it does at once without the filter): the slices turn every frame, so a
-    /// still view's AV converges toward the estimator's with this many times the slices.
-    /// 0: kept at once.
+    /// Frames a still view goes on computing the obscurance, the slices (or the spiral) turned
+    /// each frame and each frame weighed as one of the mean of the frames since the view stood
+    /// still (with the temporal filter, once that weighs more than `alpha`), before it keeps
+    /// the result: a still view's AV converges toward the estimator's with this many times the
+    /// slices, and the blur narrows as the mean grows ([`blur_radius_for`](Self::blur_radius_for)).
+    /// Without the filter a moving view's frames stand alone. 0: a still view keeps its first
+    /// frame's AV.
     pub still_frames: u32,
 }
 
@@ -355,21 +358,39 @@ impl AoSettings {
     }
 
     /// Whether the `still`-th still frame in a row (1: the first that repeats the view) computes
-    /// the obscurance again rather than keeping the last frame's: with the temporal filter,
-    /// for the first [`still_frames`](Self::still_frames).
+    /// the obscurance again rather than keeping the last frame's: the first
+    /// [`still_frames`](Self::still_frames).
     pub fn runs_when_still(&self, still: u32) -> bool {
-        self.temporal() && still <= self.still_frames
+        still <= self.still_frames
     }
 
     /// The temporal filter's weight of the history on the `still`-th still frame in a row (0:
-    /// the camera or the scene moved, or a first frame): `alpha`, and on a still frame
-    /// `max(alpha, 1 - 1 / (still + 1))`, the mean of the frames since the view stood still
-    /// (the moving frames' history counting as one).
+    /// the camera or the scene moved, or a first frame): with the filter `alpha`, and on a
+    /// still frame `max(alpha, 1 - 1 / (still + 1))`, the mean of the frames since the view
+    /// stood still (the moving frames' history counting as one); without it 0 on a moving
+    /// frame and `1 - 1 / still` on a still one, the mean of the still frames (a moving frame
+    /// keeps no history).
     pub fn history_weight(&self, still: u32) -> f32 {
         if still == 0 {
             return self.alpha;
         }
+        if !self.temporal() {
+            return 1.0 - 1.0 / still as f32;
+        }
         self.alpha.max(1.0 - 1.0 / (still as f32 + 1.0))
+    }
+
+    /// The blur's radius over a mean of `averaged` frames (1: a frame alone): `blur_radius /
+    /// sqrt(averaged)`, rounded, at least 1 (0 stays 0). The blur removes the pattern of the
+    /// slices' turns and their noise; the mean of frames whose slices turned removes them too,
+    /// so the blur narrows to average as many samples as it did over one frame and stops
+    /// averaging a pixel with neighbours whose obscurance differs (*The obscurance over time*,
+    /// README).
+    pub fn blur_radius_for(&self, averaged: f32) -> u32 {
+        if self.blur_radius == 0 || averaged.is_nan() || averaged <= 1.0 {
+            return self.blur_radius;
+        }
+        (self.blur_radius as f32 / averaged.sqrt()).round().max(1.0) as u32
     }
 
     /// The slices and taps of a frame's obscurance: all of them without the `history`, else

@@ -346,6 +346,58 @@ fn slice_estimators_converge_to_the_corner_closed_form() {
     }
 }
 
+/// One slice of `bitmask` whose turns a still view averages, on the Cornell box at 48x36.
+fn turning_slices() -> AoSettings {
+    AoSettings {
+        estimator: AoEstimator::Bitmask,
+        slices: 1,
+        samples: 16,
+        radius: 0.4,
+        ..Default::default()
+    }
+}
+
+/// The CPU reference of a still view's turned slices: layer 0 and both layers' depth pyramids
+/// as the renderer's last frame drew them.
+struct TurnedReference {
+    layout: PyramidLayout,
+    samples: Vec<deep_gbuffer::GSample>,
+    pyramids: [Vec<f32>; 2],
+}
+
+impl TurnedReference {
+    fn new(renderer: &deep_gbuffer::Renderer, w: u32, h: u32) -> TurnedReference {
+        let g = gpu();
+        let layout = PyramidLayout::new(w, h);
+        let layers = [0, 1].map(|l| renderer.read_gbuffer(&g.device, &g.queue, l).unwrap());
+        let pyramids = [0, 1].map(|l| {
+            let depth: Vec<f32> = layers[l].samples.iter().map(|s| s.depth).collect();
+            cpu_pyramid::pyramid(&depth, &layout)
+        });
+        let [layer0, _] = layers;
+        TurnedReference { layout, samples: layer0.samples, pyramids }
+    }
+
+    /// Asserts that `raw`, the renderer's AV at `turn`, is the CPU's turned estimate, and that
+    /// it differs from `unturned` (the first frame's) on more than a quarter of the pixels.
+    fn assert_turned(
+        &self,
+        renderer: &deep_gbuffer::Renderer,
+        ao: &AoSettings,
+        turn: u32,
+        raw: &[f32],
+        unturned: &[f32],
+    ) {
+        let frame = *renderer.frame_uniform().unwrap();
+        let (p0, p1) = (&self.pyramids[0], Some(&self.pyramids[1][..]));
+        let expected = cpu_ao::ao_at_turn(&frame, ao, turn, &self.samples, &self.layout, p0, p1);
+        let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
+        assert_few_differ(raw, &expected, AO_FLIPPED_FRACTION, far, "turned slices");
+        let turned = raw.iter().zip(unturned).filter(|(a, b)| far(a, b)).count();
+        assert!(turned * 4 > raw.len(), "the slices turned: {turned} pixels changed");
+    }
+}
+
 /// The temporal filter (`ao.alpha`): each frame with a history turns the slices (the CPU
 /// reference of that turn agrees) and blends its AV with the last frame's filtered AV at the same
 /// point; a still view goes on averaging for `still_frames` frames, each weighed as one of the
@@ -356,15 +408,7 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
     let scene = Scene::from_spec("builtin:cornell").unwrap();
     let camera = scene.camera_or_default();
     let (w, h) = (48, 36);
-    let ao = AoSettings {
-        estimator: AoEstimator::Bitmask,
-        slices: 1,
-        samples: 16,
-        radius: 0.4,
-        alpha: 0.85,
-        still_frames: 16,
-        ..Default::default()
-    };
+    let ao = AoSettings { alpha: 0.85, still_frames: 16, ..turning_slices() };
     let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
     let mut renderer =
         deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
@@ -380,12 +424,7 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
 
     // The frames of a still view: the slices turn, the CPU's turned estimator agrees, and each
     // frame's filtered AV is the mean of the frames so far (the first frame's counting as one).
-    let layout = PyramidLayout::new(w, h);
-    let layers = [0, 1].map(|l| renderer.read_gbuffer(&g.device, &g.queue, l).unwrap());
-    let pyramids = [0, 1].map(|l| {
-        let depth: Vec<f32> = layers[l].samples.iter().map(|s| s.depth).collect();
-        cpu_pyramid::pyramid(&depth, &layout)
-    });
+    let reference = TurnedReference::new(&renderer, w, h);
     let mut changes = Vec::new();
     for still in 1..=ao.still_frames {
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
@@ -394,20 +433,7 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
         assert!(plan.reused.contains(&PassId::Resolve), "still frame {still} keeps its G-buffer");
         let raw = read(&renderer, renderer.ao_raw_buffer());
         if still == 1 {
-            let frame = *renderer.frame_uniform().unwrap();
-            let expected = cpu_ao::ao_at_turn(
-                &frame,
-                &ao,
-                still,
-                &layers[0].samples,
-                &layout,
-                &pyramids[0],
-                Some(&pyramids[1]),
-            );
-            let far = |a: &f32, b: &f32| (a - b).abs() > AO_TOLERANCE;
-            assert_few_differ(&raw, &expected, AO_FLIPPED_FRACTION, far, "turned slices");
-            let turned = raw.iter().zip(&first_raw).filter(|(a, b)| far(a, b)).count();
-            assert!(turned * 4 > raw.len(), "the slices turned: {turned} pixels changed");
+            reference.assert_turned(&renderer, &ao, still, &raw, &first_raw);
         }
         let next = read(&renderer, renderer.ao_filtered_buffer());
         let weight = ao.alpha.max(1.0 - 1.0 / (still as f32 + 1.0));
@@ -435,4 +461,75 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
     renderer.reset_history();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     assert_eq!(read(&renderer, renderer.ao_filtered_buffer()), first_raw, "the history is dropped");
+}
+
+/// Without the temporal filter (the default) each frame of a moving view stands alone, and a
+/// still view averages its obscurance: every still frame turns the slices, the AV the blur reads
+/// is the mean of the still frames so far, and the blur narrows as the mean grows
+/// (`AoSettings::blur_radius_for`); after `still_frames` frames the view keeps it.
+#[test]
+fn a_still_view_averages_its_obscurance_without_the_filter() {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let camera = scene.camera_or_default();
+    let (w, h) = (48, 36);
+    let ao = AoSettings { still_frames: 8, ..turning_slices() };
+    assert_eq!(ao.alpha, 0.0, "the default has no temporal filter");
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let mut renderer =
+        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
+    let read = |r: &deep_gbuffer::Renderer, b: Option<&deep_gbuffer::wgpu::Buffer>| {
+        r.read_f32(&g.device, &g.queue, b.unwrap()).unwrap()[..(w * h) as usize].to_vec()
+    };
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let plan = renderer.last_plan().unwrap();
+    assert!(!plan.contains(&PassId::AoTemporal), "a first frame stands alone");
+    assert!(renderer.ao_filtered_buffer().is_none());
+    let first_raw = read(&renderer, renderer.ao_raw_buffer());
+
+    let reference = TurnedReference::new(&renderer, w, h);
+    let mut sum = vec![0.0f64; first_raw.len()];
+    let mut mean = Vec::new();
+    for still in 1..=ao.still_frames {
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        let plan = renderer.last_plan().unwrap();
+        assert!(plan.contains(&PassId::Ao), "still frame {still} computes the obscurance");
+        assert!(plan.contains(&PassId::AoTemporal), "still frame {still} averages it");
+        assert!(plan.reused.contains(&PassId::Resolve), "still frame {still} keeps its G-buffer");
+        let raw = read(&renderer, renderer.ao_raw_buffer());
+        reference.assert_turned(&renderer, &ao, still, &raw, &first_raw);
+        for (s, v) in sum.iter_mut().zip(&raw) {
+            *s += f64::from(*v);
+        }
+        mean = read(&renderer, renderer.ao_filtered_buffer());
+        for (p, (m, s)) in mean.iter().zip(&sum).enumerate() {
+            let expected = s / f64::from(still);
+            // A running mean in f32, one rounding a frame.
+            assert!((f64::from(*m) - expected).abs() < 1e-5, "frame {still}, pixel {p}: {m}");
+        }
+    }
+    // The blur over the mean of 8 frames: radius 4 / sqrt(8), rounded, 1.
+    let radius = ao.blur_radius_for(ao.still_frames as f32);
+    assert_eq!(radius, 1);
+    let frame = *renderer.frame_uniform().unwrap();
+    let samples = &reference.samples;
+    let horizontal = cpu_blur::blur((w, h), radius, false, Some(&frame), samples, &mean);
+    let blurred = cpu_blur::blur((w, h), radius, true, Some(&frame), samples, &horizontal);
+    let actual = read(&renderer, renderer.ao_buffer());
+    for (p, (a, b)) in actual.iter().zip(&blurred).enumerate() {
+        assert!((a - b).abs() <= 1e-4, "narrowed blur at pixel {p}: gpu {a} cpu {b}");
+    }
+
+    // Past still_frames the view keeps its obscurance.
+    renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    let plan = renderer.last_plan().unwrap();
+    assert!(plan.reused.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
+    assert_eq!(read(&renderer, renderer.ao_buffer()), actual, "the kept AV");
+
+    // A moved camera: a frame alone again, its AV the raw one under the whole blur.
+    let moved = Camera { eye: camera.eye + Vec3::new(0.2, 0.0, 0.0), ..camera };
+    renderer.render(&g.device, &g.queue, &buffers, &moved).unwrap();
+    let plan = renderer.last_plan().unwrap();
+    assert!(plan.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
+    assert!(renderer.ao_filtered_buffer().is_none(), "a moving frame keeps no history");
 }

@@ -424,7 +424,10 @@ fn a_still_frame_keeps_what_it_would_write_again() {
     let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
     let a = scene.camera_or_default();
     let b = deep_gbuffer::Camera { eye: a.eye + Vec3::new(0.3, 0.1, 0.0), ..a.clone() };
-    let settings = Settings { timings: false, ..Settings::with_size(40, 30) };
+    // A still view that averages its obscurance over frames computes it again (tested in
+    // tests/ao.rs); here it is kept at once, as everything else a still frame would write.
+    let ao = deep_gbuffer::AoSettings { still_frames: 0, ..Default::default() };
+    let settings = Settings { timings: false, ao, ..Settings::with_size(40, 30) };
     let mut kept = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings.clone()).unwrap();
     let mut full = deep_gbuffer::Renderer::new(&g.device, &g.queue, settings).unwrap();
     // (camera, what happens before the frame, whether the frame is still)

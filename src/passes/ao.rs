@@ -12,8 +12,8 @@ use crate::settings::{AoEstimator, Settings, downsample_level};
 
 /// The obscurance: depth pyramids of the layers it reads, its constants, AV at the resolution it
 /// is computed at (when that is not the image's), raw AV, the temporally filtered AV of the last
-/// and this frame (ping-pong, with the filter only), the blur's intermediate and blurred AV (f32
-/// per pixel).
+/// and this frame (ping-pong, with the filter or a still view's mean), the blur's intermediate
+/// and blurred AV (f32 per pixel).
 pub(crate) struct AoStage {
     two_layers: bool,
     pyramid: Pyramid,
@@ -32,6 +32,11 @@ pub(crate) struct AoStage {
     temporal: Temporal,
     /// Whether the filtered AV holds the last frame that ran the obscurance (or kept it).
     continues: bool,
+    /// Whether the last frame that ran the obscurance filtered it (the filter, or a still
+    /// view's mean): the AV the blur and the composite read is then the filtered one.
+    filtered_last: bool,
+    /// The blur's radius this frame ([`AoSettings::blur_radius_for`] the frames in the mean).
+    blur_radius: u32,
     scratch: wgpu::Buffer,
     blurred: wgpu::Buffer,
 }
@@ -58,7 +63,7 @@ impl AoStage {
             ],
             uniform: gpu::uniform_buffer_for::<AoUniform>(device, "deep-gbuffer.ao"),
             raw: buffer("deep-gbuffer.ao.raw", pixels),
-            history: s.ao.temporal().then(|| {
+            history: (s.ao.temporal() || s.ao.still_frames > 0).then(|| {
                 [
                     buffer("deep-gbuffer.ao.history.a", pixels),
                     buffer("deep-gbuffer.ao.history.b", pixels),
@@ -68,6 +73,8 @@ impl AoStage {
             turn: 0,
             temporal: Temporal::new(device, "deep-gbuffer.ao.temporal", false),
             continues: false,
+            filtered_last: false,
+            blur_radius: s.ao.blur_radius,
             scratch: buffer("deep-gbuffer.ao.blur", pixels),
             blurred: buffer("deep-gbuffer.ao.av", pixels),
             pyramid,
@@ -79,20 +86,40 @@ impl AoStage {
         self.two_layers
     }
 
-    /// Starts a frame that runs the obscurance: filters into the other history buffer and
-    /// writes the constants; `history`: the last frame's camera is known (no cut) and its
-    /// filtered AV may be used, if the last frame that ran (or kept) the obscurance was the
-    /// last frame; `still`: the frames in a row the view has stood still (the filter's weight,
+    /// Starts a frame that runs the obscurance: filters into the other history buffer (when
+    /// `filters`: the plan runs `ao.temporal`) and writes the constants; `history`: the last
+    /// frame's camera is known (no cut) and its filtered AV may be used, if the last frame that
+    /// ran (or kept) the obscurance was the last frame and filtered it; `still`: the frames in a
+    /// row the view has stood still (the filter's weight,
     /// [`AoSettings::history_weight`](crate::AoSettings::history_weight)).
-    pub(crate) fn prepare(&mut self, queue: &wgpu::Queue, s: &Settings, history: bool, still: u32) {
-        let history = history && self.continues && self.history.is_some();
+    pub(crate) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        s: &Settings,
+        (history, filters): (bool, bool),
+        still: u32,
+    ) {
+        let filters = filters && self.history.is_some();
+        let history = history && self.continues && self.filtered_last && filters;
         self.current = 1 - self.current;
-        self.turn = if history { self.turn.wrapping_add(1).max(1) } else { 0 };
+        // The slices turn on every frame the filter carries a history into, and on a still
+        // view's first frame (its mean's first term, unlike the moving frame before it).
+        self.turn = if history {
+            self.turn.wrapping_add(1).max(1)
+        } else if filters && still > 0 {
+            still
+        } else {
+            0
+        };
         let uniform = AoUniform::new(&s.ao, self.pyramid.layout(), self.turn);
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let alpha = s.ao.history_weight(still);
         self.temporal.prepare(queue, alpha, s.ao.history_tolerance, history);
+        // A still view's mean of n frames (history weight 1 - 1 / n) narrows the blur.
+        let averaged = if filters && history && still > 0 { 1.0 / (1.0 - alpha) } else { 1.0 };
+        self.blur_radius = s.ao.blur_radius_for(averaged);
         self.continues = true;
+        self.filtered_last = filters;
     }
 
     /// Marks a frame that neither ran nor kept the obscurance: the next one starts afresh.
@@ -100,9 +127,10 @@ impl AoStage {
         self.continues = false;
     }
 
-    /// The temporally filtered AV of this frame (the last, between frames), with the filter.
+    /// The temporally filtered AV of this frame (the last, between frames), when it was
+    /// filtered (the filter, or a still view's mean).
     pub(crate) fn filtered(&self) -> Option<&wgpu::Buffer> {
-        self.history.as_ref().map(|h| &h[self.current])
+        self.history.as_ref().filter(|_| self.filtered_last).map(|h| &h[self.current])
     }
 
     /// AV as the blur reads it: filtered with the temporal filter, else raw.
@@ -175,7 +203,7 @@ impl Stage for AoStage {
                 self.temporal.record(ctx, &mut pass, [&self.raw, history_in, history_out]);
             }
             PassId::AoBlur => {
-                let blur = Blur { radius: ctx.settings.ao.blur_radius, vec4: false, plane: true };
+                let blur = Blur { radius: self.blur_radius, vec4: false, plane: true };
                 blur.record(ctx, &mut pass, [self.unblurred(), &self.scratch, &self.blurred]);
             }
             other => unreachable!("{other} is not an obscurance pass"),
