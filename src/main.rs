@@ -609,7 +609,8 @@ struct RenderArgs {
     raster_work: RasterWork,
     /// Frames to render (the outputs are the last frame's) [default: until the radiosity
     /// settles, when it runs: its mean irradiance over 4 frames differs by less than 0.5% from
-    /// the 4 before, at most 128 frames; else 1].
+    /// the 4 before, at most 128 frames; and, for a still camera, at least 1 + the obscurance's
+    /// still frames (--ao-still-frames), whose mean it then shows; else 1].
     #[arg(long)]
     frames: Option<u32>,
     /// Frames rendered after the radiosity settles (without --frames), each averaged in: the
@@ -1317,9 +1318,20 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             message: "at least one frame, and a finite orbit".into(),
         });
     }
-    // Without --frames, a still camera renders until the temporal radiosity settles.
-    let settle = args.frames.is_none() && renderer.plan(&buffers, &camera).runs(Effect::Radiosity);
-    let frames = args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES } else { 1 });
+    // Without --frames, a still camera renders until the temporal radiosity settles, and at
+    // least until its obscurance has averaged its still frames (`AoSettings::still_frames`).
+    let plan = renderer.plan(&buffers, &camera);
+    let still = args.orbit == 0.0 && args.moving.is_none();
+    let ao_frames = if still && plan.runs(Effect::Ao) { 1 + settings.ao.still_frames } else { 1 };
+    let settle = args.frames.is_none() && plan.runs(Effect::Radiosity);
+    let frames =
+        args.frames.unwrap_or(if settle { SETTLE_MAX_FRAMES.max(ao_frames) } else { ao_frames });
+    if args.frames.is_none() && !settle && ao_frames > 1 {
+        eprintln!(
+            "note: the obscurance averages {} still frames (--frames sets a count)",
+            ao_frames - 1
+        );
+    }
     // The mean irradiance of the frames since the last look, and the last look's.
     let mut window = 0.0;
     let mut last_mean: Option<f64> = None;
@@ -1350,7 +1362,8 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
         }
         if settle && (i + 1).is_multiple_of(SETTLE_STEP) {
             let mean = std::mem::take(&mut window);
-            let settled = last_mean.is_some_and(|m| (mean - m).abs() <= SETTLE_CHANGE * mean);
+            let settled = i + 1 >= ao_frames
+                && last_mean.is_some_and(|m| (mean - m).abs() <= SETTLE_CHANGE * mean);
             if settled || i + 1 == frames {
                 if let Some(bar) = &bar {
                     bar.finish();

@@ -292,8 +292,15 @@ fn render_settles_the_radiosity_unless_told_a_frame_count() {
         .unwrap();
     assert!(!both.status.success(), "--average applies after the radiosity settles only");
     assert!(!run(&["builtin:cornell", "--frames", "1"]).contains("radiosity"));
+    // Without radiosity a still camera renders the obscurance's still frames, whose mean it
+    // shows, and one frame where a still view keeps its first frame's obscurance.
     let plain = run(&["builtin:cornell", "--effects", "ao,direct,shadows"]);
-    assert!(!plain.contains("radiosity") && !plain.contains("frames:"), "{plain}");
+    assert!(!plain.contains("radiosity"), "{plain}");
+    assert!(plain.contains("note: the obscurance averages 16 still frames"), "{plain}");
+    assert!(plain.contains("frames: 17/17"), "{plain}");
+    let single =
+        run(&["builtin:cornell", "--effects", "ao,direct,shadows", "--ao-still-frames", "0"]);
+    assert!(!single.contains("frames:") && !single.contains("averages"), "{single}");
 }
 
 #[test]
