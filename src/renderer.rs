@@ -610,8 +610,9 @@ impl Renderer {
     /// next frame redraws every shadow map and runs every pass a still frame would keep.
     /// Without it, a light's shadow map is drawn once and kept while the light, the scene's
     /// bounds, the shadow settings and the scene's buffers (a scene uploaded or imported anew
-    /// has new ones) stay the same, and a still camera keeps its G-buffer, obscurance and direct
-    /// light; the plan lists the kept passes in [`Plan::reused`]. For the shadow maps the camera
+    /// has new ones) stay the same, and a still camera keeps its G-buffer, obscurance (once its
+    /// still frames have averaged it) and direct light; the plan lists the kept passes in
+    /// [`Plan::reused`]. For the shadow maps the camera
     /// does not matter: it may move freely.
     ///
     /// It also gives moving geometry its motion: the renderer keeps a copy of the scene's vertex
@@ -651,7 +652,9 @@ impl Renderer {
     /// A still frame (the camera and the last frame's camera those of the frame before, the
     /// scene and its buffers the same, nothing redrawn) keeps the last frame's G-buffer,
     /// obscurance and direct light: those passes move to [`Plan::reused`] too
-    /// ([`redraw`](Renderer::redraw) makes the next frame run them).
+    /// ([`redraw`](Renderer::redraw) makes the next frame run them), but for the obscurance on
+    /// the first [`AoSettings::still_frames`](crate::AoSettings::still_frames) still frames,
+    /// which average it.
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
         self.plan_for(scene, camera, false)
     }

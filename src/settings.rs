@@ -323,7 +323,8 @@ pub struct AoSettings {
     /// the result: a still view's AV converges toward the estimator's with this many times the
     /// slices, and the blur narrows as the mean grows ([`blur_radius_for`](Self::blur_radius_for)).
     /// Without the filter a moving view's frames stand alone. 0: a still view keeps its first
-    /// frame's AV.
+    /// frame's AV (and, without the filter, the renderer keeps no history: two f32 images
+    /// fewer).
     pub still_frames: u32,
 }
 
