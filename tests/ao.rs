@@ -71,17 +71,29 @@ fn compare_with_cpu(scene: &Scene, camera: &Camera, s: Settings) -> Vec<f32> {
     }
 
     // The blur, from the GPU's own raw AV, against the CPU blur.
-    let plane = Some(&r.frame);
-    let samples = &layers[0].samples;
-    let horizontal =
-        cpu_blur::blur((w, h), ao.blur_radius, false, plane, samples, &raw[..(w * h) as usize]);
-    let blurred = cpu_blur::blur((w, h), ao.blur_radius, true, plane, samples, &horizontal);
     let actual = r.renderer.read_f32(&g.device, &g.queue, r.renderer.ao_buffer().unwrap()).unwrap();
+    let (samples, source) = (&layers[0].samples, &raw[..(w * h) as usize]);
+    assert_blurred(&r.frame, samples, ao.blur_radius, source, &actual, "blur");
+    actual[..(w * h) as usize].to_vec()
+}
+
+/// Asserts that `actual` is the CPU's blur of `source` at `radius` (both directions, the
+/// obscurance's plane weight), guided by layer 0's `samples` of `frame`.
+fn assert_blurred(
+    frame: &deep_gbuffer::frame::FrameUniform,
+    samples: &[deep_gbuffer::GSample],
+    radius: u32,
+    source: &[f32],
+    actual: &[f32],
+    what: &str,
+) {
+    let (size, plane) = ((frame.width, frame.height), Some(frame));
+    let horizontal = cpu_blur::blur(size, radius, false, plane, samples, source);
+    let blurred = cpu_blur::blur(size, radius, true, plane, samples, &horizontal);
     for (p, (a, b)) in actual.iter().zip(&blurred).enumerate() {
         // exp() and the weighted sum differ by f32 rounding only.
-        assert!((a - b).abs() <= 1e-4, "blur at pixel {p}: gpu {a} cpu {b}");
+        assert!((a - b).abs() <= 1e-4, "{what} at pixel {p}: gpu {a} cpu {b}");
     }
-    actual[..(w * h) as usize].to_vec()
 }
 
 /// At half and quarter resolution each computed texel is the full-resolution estimate at the
@@ -346,7 +358,31 @@ fn slice_estimators_converge_to_the_corner_closed_form() {
     }
 }
 
-/// One slice of `bitmask` whose turns a still view averages, on the Cornell box at 48x36.
+/// The still views' image size.
+const STILL_SIZE: (u32, u32) = (48, 36);
+
+/// The Cornell box from its camera at `STILL_SIZE` under `ao`: the device, the camera, the
+/// scene's buffers and a renderer that has drawn nothing yet.
+fn still_view(
+    ao: &AoSettings,
+) -> (&'static deep_gbuffer::gpu::Gpu, Camera, deep_gbuffer::SceneBuffers, deep_gbuffer::Renderer) {
+    let g = gpu();
+    let scene = Scene::from_spec("builtin:cornell").unwrap();
+    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
+    let (w, h) = STILL_SIZE;
+    let renderer =
+        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
+    (g, scene.camera_or_default(), buffers, renderer)
+}
+
+/// One of the renderer's per-pixel f32 buffers at `STILL_SIZE`.
+fn read_av(r: &deep_gbuffer::Renderer, b: Option<&deep_gbuffer::wgpu::Buffer>) -> Vec<f32> {
+    let g = gpu();
+    let (w, h) = STILL_SIZE;
+    r.read_f32(&g.device, &g.queue, b.unwrap()).unwrap()[..(w * h) as usize].to_vec()
+}
+
+/// One slice of `bitmask` whose turns a still view averages, on the Cornell box.
 fn turning_slices() -> AoSettings {
     AoSettings {
         estimator: AoEstimator::Bitmask,
@@ -366,8 +402,9 @@ struct TurnedReference {
 }
 
 impl TurnedReference {
-    fn new(renderer: &deep_gbuffer::Renderer, w: u32, h: u32) -> TurnedReference {
+    fn new(renderer: &deep_gbuffer::Renderer) -> TurnedReference {
         let g = gpu();
+        let (w, h) = STILL_SIZE;
         let layout = PyramidLayout::new(w, h);
         let layers = [0, 1].map(|l| renderer.read_gbuffer(&g.device, &g.queue, l).unwrap());
         let pyramids = [0, 1].map(|l| {
@@ -404,38 +441,29 @@ impl TurnedReference {
 /// mean once that weighs less than alpha, and then keeps the result; a cut starts afresh.
 #[test]
 fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
-    let g = gpu();
-    let scene = Scene::from_spec("builtin:cornell").unwrap();
-    let camera = scene.camera_or_default();
-    let (w, h) = (48, 36);
     let ao = AoSettings { alpha: 0.85, still_frames: 16, ..turning_slices() };
-    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
-    let mut renderer =
-        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
-    let read = |r: &deep_gbuffer::Renderer, b: Option<&deep_gbuffer::wgpu::Buffer>| {
-        r.read_f32(&g.device, &g.queue, b.unwrap()).unwrap()[..(w * h) as usize].to_vec()
-    };
+    let (g, camera, buffers, mut renderer) = still_view(&ao);
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     let plan = renderer.last_plan().unwrap();
     assert!(plan.contains(&PassId::AoTemporal), "the filter runs with alpha above 0");
-    let first_raw = read(&renderer, renderer.ao_raw_buffer());
-    let mut filtered = read(&renderer, renderer.ao_filtered_buffer());
+    let first_raw = read_av(&renderer, renderer.ao_raw_buffer());
+    let mut filtered = read_av(&renderer, renderer.ao_filtered_buffer());
     assert_eq!(filtered, first_raw, "a first frame has no history: its own AV");
 
     // The frames of a still view: the slices turn, the CPU's turned estimator agrees, and each
     // frame's filtered AV is the mean of the frames so far (the first frame's counting as one).
-    let reference = TurnedReference::new(&renderer, w, h);
+    let reference = TurnedReference::new(&renderer);
     let mut changes = Vec::new();
     for still in 1..=ao.still_frames {
         renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
         let plan = renderer.last_plan().unwrap();
         assert!(plan.contains(&PassId::Ao), "still frame {still} computes the obscurance");
         assert!(plan.reused.contains(&PassId::Resolve), "still frame {still} keeps its G-buffer");
-        let raw = read(&renderer, renderer.ao_raw_buffer());
+        let raw = read_av(&renderer, renderer.ao_raw_buffer());
         if still == 1 {
             reference.assert_turned(&renderer, &ao, still, &raw, &first_raw);
         }
-        let next = read(&renderer, renderer.ao_filtered_buffer());
+        let next = read_av(&renderer, renderer.ao_filtered_buffer());
         let weight = ao.alpha.max(1.0 - 1.0 / (still as f32 + 1.0));
         for p in 0..raw.len() {
             let expected = raw[p] * (1.0 - weight) + filtered[p] * weight;
@@ -455,12 +483,16 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     let plan = renderer.last_plan().unwrap();
     assert!(plan.reused.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
-    assert_eq!(read(&renderer, renderer.ao_filtered_buffer()), filtered, "the kept AV");
+    assert_eq!(read_av(&renderer, renderer.ao_filtered_buffer()), filtered, "the kept AV");
 
     // A cut: the next frame is a first frame again.
     renderer.reset_history();
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-    assert_eq!(read(&renderer, renderer.ao_filtered_buffer()), first_raw, "the history is dropped");
+    assert_eq!(
+        read_av(&renderer, renderer.ao_filtered_buffer()),
+        first_raw,
+        "the history is dropped"
+    );
 }
 
 /// Without the temporal filter (the default) each frame of a moving view stands alone, and a
@@ -469,25 +501,16 @@ fn the_temporal_filter_averages_turned_slices_until_a_still_view_settles() {
 /// (`AoSettings::blur_radius_for`); after `still_frames` frames the view keeps it.
 #[test]
 fn a_still_view_averages_its_obscurance_without_the_filter() {
-    let g = gpu();
-    let scene = Scene::from_spec("builtin:cornell").unwrap();
-    let camera = scene.camera_or_default();
-    let (w, h) = (48, 36);
     let ao = AoSettings { still_frames: 8, ..turning_slices() };
     assert_eq!(ao.alpha, 0.0, "the default has no temporal filter");
-    let buffers = deep_gbuffer::SceneBuffers::upload(&g.device, &scene).unwrap();
-    let mut renderer =
-        deep_gbuffer::Renderer::new(&g.device, &g.queue, settings(w, h, ao.clone())).unwrap();
-    let read = |r: &deep_gbuffer::Renderer, b: Option<&deep_gbuffer::wgpu::Buffer>| {
-        r.read_f32(&g.device, &g.queue, b.unwrap()).unwrap()[..(w * h) as usize].to_vec()
-    };
+    let (g, camera, buffers, mut renderer) = still_view(&ao);
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     let plan = renderer.last_plan().unwrap();
     assert!(!plan.contains(&PassId::AoTemporal), "a first frame stands alone");
     assert!(renderer.ao_filtered_buffer().is_none());
-    let first_raw = read(&renderer, renderer.ao_raw_buffer());
+    let first_raw = read_av(&renderer, renderer.ao_raw_buffer());
 
-    let reference = TurnedReference::new(&renderer, w, h);
+    let reference = TurnedReference::new(&renderer);
     let mut sum = vec![0.0f64; first_raw.len()];
     let mut mean = Vec::new();
     for still in 1..=ao.still_frames {
@@ -496,12 +519,12 @@ fn a_still_view_averages_its_obscurance_without_the_filter() {
         assert!(plan.contains(&PassId::Ao), "still frame {still} computes the obscurance");
         assert!(plan.contains(&PassId::AoTemporal), "still frame {still} averages it");
         assert!(plan.reused.contains(&PassId::Resolve), "still frame {still} keeps its G-buffer");
-        let raw = read(&renderer, renderer.ao_raw_buffer());
+        let raw = read_av(&renderer, renderer.ao_raw_buffer());
         reference.assert_turned(&renderer, &ao, still, &raw, &first_raw);
         for (s, v) in sum.iter_mut().zip(&raw) {
             *s += f64::from(*v);
         }
-        mean = read(&renderer, renderer.ao_filtered_buffer());
+        mean = read_av(&renderer, renderer.ao_filtered_buffer());
         for (p, (m, s)) in mean.iter().zip(&sum).enumerate() {
             let expected = s / f64::from(still);
             // A running mean in f32, one rounding a frame.
@@ -512,19 +535,14 @@ fn a_still_view_averages_its_obscurance_without_the_filter() {
     let radius = ao.blur_radius_for(ao.still_frames as f32);
     assert_eq!(radius, 1);
     let frame = *renderer.frame_uniform().unwrap();
-    let samples = &reference.samples;
-    let horizontal = cpu_blur::blur((w, h), radius, false, Some(&frame), samples, &mean);
-    let blurred = cpu_blur::blur((w, h), radius, true, Some(&frame), samples, &horizontal);
-    let actual = read(&renderer, renderer.ao_buffer());
-    for (p, (a, b)) in actual.iter().zip(&blurred).enumerate() {
-        assert!((a - b).abs() <= 1e-4, "narrowed blur at pixel {p}: gpu {a} cpu {b}");
-    }
+    let actual = read_av(&renderer, renderer.ao_buffer());
+    assert_blurred(&frame, &reference.samples, radius, &mean, &actual, "narrowed blur");
 
     // Past still_frames the view keeps its obscurance.
     renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
     let plan = renderer.last_plan().unwrap();
     assert!(plan.reused.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
-    assert_eq!(read(&renderer, renderer.ao_buffer()), actual, "the kept AV");
+    assert_eq!(read_av(&renderer, renderer.ao_buffer()), actual, "the kept AV");
 
     // A moved camera: a frame alone again, its AV the raw one under the whole blur.
     let moved = Camera { eye: camera.eye + Vec3::new(0.2, 0.0, 0.0), ..camera };
@@ -532,4 +550,9 @@ fn a_still_view_averages_its_obscurance_without_the_filter() {
     let plan = renderer.last_plan().unwrap();
     assert!(plan.contains(&PassId::Ao) && !plan.contains(&PassId::AoTemporal));
     assert!(renderer.ao_filtered_buffer().is_none(), "a moving frame keeps no history");
+    let raw = read_av(&renderer, renderer.ao_raw_buffer());
+    let frame = *renderer.frame_uniform().unwrap();
+    let samples = &TurnedReference::new(&renderer).samples;
+    let actual = read_av(&renderer, renderer.ao_buffer());
+    assert_blurred(&frame, samples, ao.blur_radius, &raw, &actual, "moved, blur");
 }

@@ -47,7 +47,7 @@ fn blur_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 #if PLANE
     let pc = view_position(frame, vec2<f32>(gid.xy) + 0.5, zc);
     let nc = mat_mul(frame.view, vec4<f32>(gword_normal(centre), 0.0)).xyz;
-    let footprint = pixel_footprint(frame, zc);
+    let footprint = 1.0 / pixels_per_unit(frame, zc);
 #endif
     var mean = Mean();
     for (var k = -r; k <= r; k++) {

@@ -3,10 +3,11 @@
 use glam::{Vec2, Vec3, Vec4Swizzles};
 
 use crate::cpu::frame::mat_mul;
+use crate::cpu::frame::pixels_per_unit;
 pub use crate::cpu::frame::view_position;
 use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs, step_distance};
-use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap};
+use crate::cpu::spiral::{spiral_distance, spiral_tap};
 use crate::frame::FrameUniform;
 use crate::frame::PyramidLayout;
 use crate::gbuffer::GSample;

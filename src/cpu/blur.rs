@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::cpu::frame::{mat_mul, pixel_footprint, view_position};
+use crate::cpu::frame::{mat_mul, pixels_per_unit, view_position};
 use crate::cpu::mean::Mean;
 use crate::frame::FrameUniform;
 use crate::gbuffer::GSample;
@@ -52,7 +52,7 @@ pub fn blur(
             }
             let tangent = plane.map(|f| {
                 let nc = mat_mul(&f.view, center.normal.extend(0.0).to_array()).truncate();
-                (f, point(f, x, y, center.depth), nc, pixel_footprint(f, center.depth))
+                (f, point(f, x, y, center.depth), nc, 1.0 / pixels_per_unit(f, center.depth))
             });
             let mut mean = Mean::new(0.0f32);
             for k in -r..=r {
@@ -102,7 +102,7 @@ mod tests {
                 let unit = view_position(f, Vec2::new(x as f32 + 0.5, y as f32 + 0.5), 1.0);
                 let mut depth = -n.dot(eye) / n.dot(unit);
                 if grooves && x % 2 == 1 {
-                    depth -= 1.5 * pixel_footprint(f, depth) / n.dot(unit);
+                    depth -= 1.5 / pixels_per_unit(f, depth) / n.dot(unit);
                 }
                 samples.push(GSample { depth, normal: n, ..GSample::default() });
             }

@@ -31,11 +31,11 @@ pub fn toward_camera(f: &FrameUniform, world: Vec3) -> Vec3 {
     (Vec3::from_slice(&f.inv_view[3][..3]) - world).normalize()
 }
 
-/// As `pixel_footprint`: the distance between neighbouring pixels' rays at view depth `d` (their
-/// spacing on the image plane for an orthographic camera).
-pub fn pixel_footprint(f: &FrameUniform, d: f32) -> f32 {
-    let spacing = 2.0 / (f.proj[1][1] * f.height as f32);
-    if f.ortho != 0 { spacing } else { spacing * d }
+/// As `pixels_per_unit`: pixels per scene unit at view depth `z` (anywhere for an orthographic
+/// camera).
+pub fn pixels_per_unit(f: &FrameUniform, z: f32) -> f32 {
+    let scale = f.proj[1][1] * f.height as f32 * 0.5;
+    if f.ortho != 0 { scale } else { scale / z }
 }
 
 /// As `view_position`: the view-space point at view depth `d` through pixel coordinate `px`.

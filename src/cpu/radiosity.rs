@@ -5,10 +5,11 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 
+use crate::cpu::frame::pixels_per_unit;
 use crate::cpu::frame::{mat_mul, view_position};
 use crate::cpu::pyramid::{mip_coarsest, mip_level, mip_origin, mip_size, mip_texel, rotated_grid};
 use crate::cpu::slices::{SECTORS, Slice, slice_noise, solid_backs, step_distance};
-use crate::cpu::spiral::{pixels_per_unit, spiral_distance, spiral_tap_turned};
+use crate::cpu::spiral::{spiral_distance, spiral_tap_turned};
 use crate::frame::{FrameUniform, PyramidLayout, RadiosityUniform, SourceTexel};
 use crate::gbuffer::GSample;
 use crate::settings::Boost;

@@ -4,6 +4,7 @@ use std::f32::consts::TAU;
 
 use glam::Vec2;
 
+use crate::cpu::frame::pixels_per_unit;
 use crate::frame::FrameUniform;
 
 pub(crate) const GOLDEN_TURNS: f32 = 0.381_966_01;
@@ -17,12 +18,6 @@ pub fn pixel_hash(x: u32, y: u32) -> u32 {
     h = h.wrapping_mul(0x846c_a68b);
     h ^= h >> 16;
     h
-}
-
-/// As `pixels_per_unit`.
-pub fn pixels_per_unit(f: &FrameUniform, z: f32) -> f32 {
-    let scale = f.proj[1][1] * f.height as f32 * 0.5;
-    if f.ortho != 0 { scale } else { scale / z }
 }
 
 /// As `depth_slope_span`: how far the view depth of a surface (view-space point `v`, normal `n`)

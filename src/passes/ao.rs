@@ -133,7 +133,8 @@ impl AoStage {
         self.history.as_ref().filter(|_| self.filtered_last).map(|h| &h[self.current])
     }
 
-    /// AV as the blur reads it: filtered with the temporal filter, else raw.
+    /// AV as the blur reads it: filtered when this frame filtered it (the temporal filter or a
+    /// still view's mean), else raw.
     fn unblurred(&self) -> &wgpu::Buffer {
         self.filtered().unwrap_or(&self.raw)
     }

@@ -16,7 +16,7 @@ fn bilateral_weight(z: f32, n: vec3<f32>, zc: f32, nc: vec3<f32>) -> f32 {
 
 // The weight of a sample at view-space point q against the centre's point c and view-space
 // normal nc by its distance from the centre's tangent plane, in `footprint`s (the distance
-// between neighbouring pixels' rays at the centre's depth):
+// between neighbouring pixels' rays at the centre's depth, 1 / pixels_per_unit):
 //     max(0, 1 - |nc.(q - c)| / footprint).
 // A neighbour on the centre's plane weighs 1 however slanted the plane, one a pixel's footprint
 // off it 0: the floor and top of a groove narrower than the depth tolerance stay apart.

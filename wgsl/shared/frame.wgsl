@@ -49,11 +49,11 @@ fn view_position(f: Frame, px: vec2<f32>, d: f32) -> vec3<f32> {
     return vec3<f32>(ndc.x * d / f.proj[0].x, ndc.y * d / f.proj[1].y, -d);
 }
 
-// The distance between neighbouring pixels' rays at view depth d (their spacing on the image
-// plane for an orthographic camera). src/cpu/frame.rs has the same.
-fn pixel_footprint(f: Frame, d: f32) -> f32 {
-    let spacing = 2.0 / (f.proj[1].y * f32(f.height));
-    return select(spacing * d, spacing, f.ortho != 0u);
+// Pixels per scene unit at view depth z (anywhere for an orthographic camera): one over the
+// distance between neighbouring pixels' rays there. src/cpu/frame.rs has the same.
+fn pixels_per_unit(f: Frame, z: f32) -> f32 {
+    let scale = f.proj[1].y * f32(f.height) * 0.5;
+    return select(scale / z, scale, f.ortho != 0u);
 }
 
 // The unit world direction from world point `world` towards the camera (its backward axis for an

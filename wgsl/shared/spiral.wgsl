@@ -17,12 +17,6 @@ fn pixel_hash(pixel: vec2<u32>) -> u32 {
     return h;
 }
 
-// Pixels per scene unit at view depth z.
-fn pixels_per_unit(f: Frame, z: f32) -> f32 {
-    let scale = f.proj[1].y * f32(f.height) * 0.5;
-    return select(scale / z, scale, f.ortho != 0u);
-}
-
 // How far the view depth of a surface (view-space point v, normal n) runs over `pixels` of the
 // screen: that many pixels' footprint at its depth times the surface's slope to the view ray
 // (the tangent of their angle, at most 10). src/cpu/spiral.rs has the same.
