@@ -399,6 +399,10 @@ struct RadiosityArgs {
     /// with more noise in each [default: 0.7].
     #[arg(long)]
     radiosity_still_alpha: Option<f32>,
+    /// Frames of a settled still view's mean after which the view keeps its radiosity and
+    /// runs no radiosity pass until it moves; 0: never [default: 256].
+    #[arg(long)]
+    radiosity_kept_after: Option<u32>,
     /// Take a surface's outgoing light only where it faces the gathering point; a slices
     /// gather takes what a surface facing away sends from its far side, its emission and the
     /// indirect light it reflects, and from a curved surface the side the point sees (see
@@ -427,6 +431,7 @@ impl RadiosityArgs {
         r.damping = self.damping.unwrap_or(r.damping);
         r.alpha = self.radiosity_alpha.unwrap_or(r.alpha);
         r.still_alpha = self.radiosity_still_alpha.unwrap_or(r.still_alpha);
+        r.kept_after = self.radiosity_kept_after.unwrap_or(r.kept_after);
         r.normal_test = self.radiosity_normal_test.unwrap_or(r.normal_test);
         r.offscreen = self.radiosity_offscreen.unwrap_or(r.offscreen);
     }

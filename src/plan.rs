@@ -212,8 +212,8 @@ impl PassId {
     /// Whether the pass writes the same result on a still frame as on the frame before: it
     /// reads nothing that changes from frame to frame but the camera, the scene and the shadow
     /// maps (the G-buffer, the depth pyramid, the obscurance, the direct light; not the
-    /// radiosity, which gathers anew every frame). A still frame keeps these passes' results
-    /// ([`Plan::reused`]).
+    /// radiosity, which gathers anew every frame until its mean is kept, nor the reflections,
+    /// which read it). A still frame keeps these passes' results ([`Plan::reused`]).
     pub fn same_when_still(&self) -> bool {
         self.is_gbuffer() || matches!(self.effect(), Some(Effect::Ao | Effect::Direct))
     }
@@ -314,6 +314,10 @@ pub struct Plan {
     ///   is drawn, and the renderer drew the last frame's G-buffer itself. So a view that stops
     ///   moving keeps them from its second still frame on (the first still frame's G-buffer is
     ///   the first with no motion), while the radiosity goes on gathering its next bounces.
+    /// - On a still frame past the radiosity's settled mean of
+    ///   [`RadiositySettings::kept_after`](crate::RadiositySettings::kept_after) frames, the
+    ///   radiosity's passes; and the reflections on a still frame that runs neither the
+    ///   obscurance nor the radiosity.
     pub reused: Vec<PassId>,
 }
 

@@ -597,11 +597,16 @@ impl Renderer {
     /// The still frames the radiosity's filter weighs by: past [`settle`](Self::settle), as
     /// many past `settle_frames` as have stood still since.
     fn radiosity_still(&self) -> u32 {
+        self.radiosity_still_at(self.still_frames)
+    }
+
+    /// [`radiosity_still`](Self::radiosity_still) on the `still`-th still frame in a row.
+    fn radiosity_still_at(&self, still: u32) -> u32 {
         match self.settled_at {
-            Some(at) if self.still_frames > at => {
-                self.settings.radiosity.settle_frames().saturating_add(self.still_frames - at)
+            Some(at) if still > at => {
+                self.settings.radiosity.settle_frames().saturating_add(still - at)
             }
-            _ => self.still_frames,
+            _ => still,
         }
     }
 
@@ -654,7 +659,10 @@ impl Renderer {
     /// obscurance and direct light: those passes move to [`Plan::reused`] too
     /// ([`redraw`](Renderer::redraw) makes the next frame run them), but for the obscurance on
     /// the first [`AoSettings::still_frames`](crate::AoSettings::still_frames) still frames,
-    /// which average it.
+    /// which average it. Once the radiosity's settled mean holds
+    /// [`RadiositySettings::kept_after`](crate::RadiositySettings::kept_after) frames its
+    /// passes are kept too, and the reflections whenever neither the obscurance nor the
+    /// radiosity runs in the frame (what they read is then the last frame's).
     pub fn plan(&self, scene: &SceneBuffers, camera: &Camera) -> Plan {
         self.plan_for(scene, camera, false)
     }
@@ -688,16 +696,30 @@ impl Renderer {
             // The obscurance goes on averaging turned slices for a while, with the temporal
             // filter or, without it, in a mean of the still frames alone.
             let ao = self.settings.ao.runs_when_still(self.still_frames + 1);
+            // The radiosity, once its settled mean holds enough frames; the reflections,
+            // whenever nothing they read (the obscurance, the radiosity) runs this frame.
+            let radiosity = plan.runs(Effect::Radiosity)
+                && !self
+                    .settings
+                    .radiosity
+                    .kept_when_still(self.radiosity_still_at(self.still_frames + 1));
+            let reflections_kept = !ao && !radiosity;
             if ao
                 && !plan.contains(&PassId::AoTemporal)
                 && let Some(i) = plan.passes.iter().position(|p| *p == PassId::Ao)
             {
                 plan.passes.insert(i + 1, PassId::AoTemporal);
             }
-            let (kept, run): (Vec<PassId>, Vec<PassId>) = plan.passes.into_iter().partition(|p| {
-                p.same_when_still()
-                    && !(ao && matches!(p, PassId::Ao | PassId::AoTemporal | PassId::AoBlur))
-            });
+            let (kept, run): (Vec<PassId>, Vec<PassId>) =
+                plan.passes.into_iter().partition(|p| match p.effect() {
+                    Some(Effect::Radiosity) => !radiosity,
+                    Some(Effect::Reflections) => reflections_kept,
+                    _ => {
+                        p.same_when_still()
+                            && !(ao
+                                && matches!(p, PassId::Ao | PassId::AoTemporal | PassId::AoBlur))
+                    }
+                });
             plan.passes = run;
             plan.reused.extend(kept);
         }
@@ -919,7 +941,8 @@ impl Renderer {
             }
         }
         st.direct.prepare(queue, scene, s, plan);
-        if plan.runs(Effect::Radiosity) {
+        // A still view that keeps its radiosity keeps this frame's buffers as they are.
+        if plan.runs(Effect::Radiosity) && plan.contains(&PassId::Radiosity) {
             // The history is usable only if this stage drew the last frame.
             let history = self.history.is_some() && st.radiosity.is_some();
             let radiosity = st.radiosity.get_or_insert_with(|| RadiosityStage::new(device, s));

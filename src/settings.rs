@@ -590,6 +590,14 @@ pub struct RadiositySettings {
     /// the moving Cornell box's frame about 0.8 of its time, for indirect light that lags a
     /// moving camera a little more (README, "One slice a moving frame").
     pub history_slices: u32,
+    /// Frames of a settled still view's mean after which the view keeps its radiosity: once
+    /// the bounces have settled ([`settle_frames`](Self::settle_frames), or
+    /// `Renderer::settle`) the temporal filter averages the frames since
+    /// ([`history_weight`](Self::history_weight)), and after this many the still frames run no
+    /// radiosity pass (the plan lists them as reused) until the view moves, keeping the mean
+    /// (its noise `1 / sqrt(kept_after)` of one frame's; the default's, 256 frames, a
+    /// sixteenth). 0: a still view never keeps it.
+    pub kept_after: u32,
 }
 
 /// How the radiosity pass gathers irradiance from what the layers show (`wgsl/radiosity.wgsl`).
@@ -681,6 +689,7 @@ impl Default for RadiositySettings {
             extrapolation: 0.6,
             offscreen: true,
             history_slices: 1,
+            kept_after: 256,
         }
     }
 }
@@ -698,6 +707,13 @@ impl RadiositySettings {
         }
         // A float-to-integer cast saturates.
         (1e-3f32.ln() / c.ln()).ceil() as u32
+    }
+
+    /// Whether the `still`-th still frame in a row of a still view (counted as the filter
+    /// counts it, [`history_weight`](Self::history_weight)) keeps the radiosity of the frame
+    /// before: [`kept_after`](Self::kept_after) frames of the settled mean are behind it.
+    pub fn kept_when_still(&self, still: u32) -> bool {
+        self.kept_after > 0 && still > self.settle_frames().saturating_add(self.kept_after)
     }
 
     /// The slices and taps of a frame's gathers (the `slices` of the pixel gather, its taps and

@@ -757,3 +757,61 @@ fn a_view_the_host_calls_settled_averages_from_then_on() {
             .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
     );
 }
+
+/// A still view keeps its radiosity once the mean of its settled frames holds `kept_after` of
+/// them (`RadiositySettings::kept_when_still`): the still frames after it run no radiosity pass
+/// (the plan lists them as reused) and the irradiance stays as it was, bit for bit, until the
+/// view moves. With `kept_after` 0 it is never kept.
+#[test]
+fn a_settled_still_view_keeps_its_radiosity() {
+    let g = gpu();
+    let (camera, buffers) = cornell_uploaded();
+    let mut s = settings(32, 24);
+    // A still weight of 0 settles in few frames (the feedback gain alone: 31).
+    s.radiosity.still_alpha = 0.0;
+    s.radiosity.kept_after = 4;
+    let settle = s.radiosity.settle_frames();
+    assert_eq!(settle, 31);
+    assert!(!s.radiosity.kept_when_still(settle + 4));
+    assert!(s.radiosity.kept_when_still(settle + 5));
+    let never = RadiositySettings { kept_after: 0, ..s.radiosity.clone() };
+    assert!(!never.kept_when_still(u32::MAX));
+
+    let runs = |r: &Renderer| r.passes().contains(&deep_gbuffer::PassId::Radiosity);
+    let irradiance = |r: &Renderer| {
+        read4(r, r.radiosity_buffers().unwrap().irradiance)
+            .iter()
+            .flat_map(|v| v.to_array().map(f32::to_bits))
+            .collect::<Vec<u32>>()
+    };
+    let mut renderer = Renderer::new(&g.device, &g.queue, s.clone()).unwrap();
+    // Frame k stands still for k - 1 frames: the last to gather is the (settle + 5)-th.
+    for _ in 0..settle + 5 {
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        assert!(runs(&renderer), "the radiosity gathers until its mean holds 4 frames");
+    }
+    let plan = renderer.plan(&buffers, &camera);
+    assert!(plan.reused.contains(&deep_gbuffer::PassId::Radiosity), "{:?}", plan.reused);
+    assert!(plan.runs(deep_gbuffer::Effect::Radiosity), "kept, the radiosity still lights");
+    let settled = irradiance(&renderer);
+    for _ in 0..3 {
+        renderer.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        assert!(!runs(&renderer));
+        assert!(irradiance(&renderer) == settled, "the kept radiosity changed");
+    }
+    let image = renderer.read_rgb(&g.device, &g.queue, renderer.hdr_buffer()).unwrap();
+    assert!(image.iter().all(|c| c.is_finite()) && image.iter().any(|c| c.max_element() > 0.0));
+
+    // A move gathers again, from the kept history.
+    let moved = Camera { eye: camera.eye + glam::Vec3::new(0.05, 0.0, 0.0), ..camera.clone() };
+    renderer.render(&g.device, &g.queue, &buffers, &moved).unwrap();
+    assert!(runs(&renderer));
+    assert!(irradiance(&renderer) != settled);
+
+    let mut always =
+        Renderer::new(&g.device, &g.queue, Settings { radiosity: never, ..s }).unwrap();
+    for _ in 0..settle + 8 {
+        always.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+    }
+    assert!(runs(&always), "kept_after 0 keeps nothing");
+}

@@ -654,3 +654,37 @@ fn a_mirror_shows_the_lit_side_of_a_box_the_camera_does_not_see() {
     assert!(counted > 20, "mirrored rays meet the hidden face ({counted})");
     assert_eq!(shown, counted, "mirror pixels that show the lit face");
 }
+
+/// A still view keeps its reflections when nothing they read changes (the obscurance kept, the
+/// radiosity off or kept): its still frames run no reflections pass, and its reflected light and
+/// image stay, bit for bit, those of a renderer that runs every pass.
+#[test]
+fn a_still_view_keeps_its_reflections() {
+    let g = common::gpu();
+    let scene = Scene::from_spec("builtin:grid-20000").unwrap();
+    let buffers = SceneBuffers::upload(&g.device, &scene).unwrap();
+    let camera = scene.camera_or_default();
+    let mut s = Settings { timings: false, ..Settings::with_size(48, 36) };
+    // The obscurance kept from the first still frame on (a still view that averages it runs
+    // the reflections while it does); no radiosity.
+    s.ao.still_frames = 0;
+    s.radiosity.enabled = false;
+    let mut kept = Renderer::new(&g.device, &g.queue, s.clone()).unwrap();
+    let mut full = Renderer::new(&g.device, &g.queue, s).unwrap();
+    let runs = |r: &Renderer| r.passes().contains(&deep_gbuffer::PassId::Reflections);
+    for frame in 0..4 {
+        full.redraw();
+        for r in [&mut kept, &mut full] {
+            r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        }
+        assert!(runs(&full));
+        assert_eq!(runs(&kept), frame == 0, "frame {frame}");
+        let (x, y) = (
+            kept.read_terms(&g.device, &g.queue).unwrap(),
+            full.read_terms(&g.device, &g.queue).unwrap(),
+        );
+        assert!(x.reflections.as_ref().is_some_and(|r| r.iter().any(|c| c.max_element() > 0.0)));
+        assert!(x.reflections == y.reflections, "frame {frame}: reflections differ");
+        assert!(x.hdr == y.hdr, "frame {frame}: the image differs");
+    }
+}
