@@ -588,8 +588,10 @@ impl Renderer {
     /// [`RadiositySettings::settle_frames`](crate::RadiositySettings::settle_frames) still frames
     /// (a bound for any scene, 112 with the defaults): the gather's noise, which the turned
     /// slices make different every frame, then falls as one over the square root of the frames,
-    /// where the exponential filter keeps it at a fixed share of one frame's. A frame whose view
-    /// moves, or [`reset_history`](Self::reset_history), forgets it.
+    /// where the exponential filter keeps it at a fixed share of one frame's; after
+    /// [`RadiositySettings::kept_after`](crate::RadiositySettings::kept_after) such frames the
+    /// still view keeps the mean and runs no radiosity pass. A frame whose view moves, or
+    /// [`reset_history`](Self::reset_history), forgets it.
     pub fn settle(&mut self) {
         self.settled_at = Some(self.still_frames);
     }
