@@ -1439,7 +1439,12 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
     }
     if let Some(path) = &args.timings {
         let passes = renderer.timings(&gpu.device)?;
-        if passes.is_empty() {
+        if renderer.passes().is_empty() {
+            eprintln!(
+                "note: the last frame kept every pass from the frames before (a settled still \
+                 view); the timings list is empty and `reused` names them"
+            );
+        } else if passes.is_empty() {
             eprintln!("warning: the device has no timestamp queries; the timings list is empty");
         }
         let file = TimingsFile {
@@ -1451,7 +1456,8 @@ fn render(adapter: &Option<String>, args: RenderArgs) -> Result<()> {
             raster_work: renderer.raster_work().name(),
             triangles: buffers.triangle_count(),
             binned_triangles: diagnostics.large_triangles,
-            total_ms: passes.iter().map(|p| p.ms).sum(),
+            // (A float sum of nothing is -0.)
+            total_ms: passes.iter().fold(0.0, |sum, p| sum + p.ms),
             passes,
             reused: renderer
                 .last_plan()

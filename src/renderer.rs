@@ -722,6 +722,14 @@ impl Renderer {
                                 && matches!(p, PassId::Ao | PassId::AoTemporal | PassId::AoBlur))
                     }
                 });
+            // With nothing before them to run, the composite and the passes after it would
+            // write the image they wrote.
+            let (run, kept) = if run.iter().all(|p| p.stage() == StageId::Composite || p.is_post())
+            {
+                (Vec::new(), kept.into_iter().chain(run).collect())
+            } else {
+                (run, kept)
+            };
             plan.passes = run;
             plan.reused.extend(kept);
         }
