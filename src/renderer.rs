@@ -590,14 +590,17 @@ impl Renderer {
     /// slices make different every frame, then falls as one over the square root of the frames,
     /// where the exponential filter keeps it at a fixed share of one frame's; after
     /// [`RadiositySettings::kept_after`](crate::RadiositySettings::kept_after) such frames the
-    /// still view keeps the mean and runs no radiosity pass. A frame whose view moves, or
+    /// still view keeps the mean and runs no radiosity pass. Told again under the same view, it
+    /// keeps the first time. A frame whose view moves, or
     /// [`reset_history`](Self::reset_history), forgets it.
     pub fn settle(&mut self) {
-        self.settled_at = Some(self.still_frames);
+        // Told again, or past the bound already: the mean goes on, it does not start over.
+        self.settled_at.get_or_insert(self.still_frames);
     }
 
     /// The still frames the radiosity's filter weighs by: past [`settle`](Self::settle), as
-    /// many past `settle_frames` as have stood still since.
+    /// many past `settle_frames` as have stood still since (never fewer than the still frames:
+    /// a view told late, past the bound, goes on averaging).
     fn radiosity_still(&self) -> u32 {
         self.radiosity_still_at(self.still_frames)
     }
@@ -606,7 +609,7 @@ impl Renderer {
     fn radiosity_still_at(&self, still: u32) -> u32 {
         match self.settled_at {
             Some(at) if still > at => {
-                self.settings.radiosity.settle_frames().saturating_add(still - at)
+                self.settings.radiosity.settle_frames().saturating_add(still - at).max(still)
             }
             _ => still,
         }

@@ -814,6 +814,28 @@ fn a_settled_still_view_keeps_its_radiosity() {
     assert!(runs(&renderer));
     assert!(irradiance(&renderer) != settled);
 
+    // A host that says the view settled, and says it again, keeps it once the mean since the
+    // first time holds the frames; told past the bound, the mean goes on instead of starting
+    // over.
+    let mut told = Renderer::new(&g.device, &g.queue, s.clone()).unwrap();
+    for frame in 1..=10u32 {
+        told.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        // Frame k stands still for k - 1: told after frames 2 and 4, its mean holds 5 frames
+        // at the 6th.
+        assert_eq!(runs(&told), frame <= 6, "frame {frame}");
+        if frame == 2 || frame == 4 {
+            told.settle();
+        }
+    }
+    let mut late = Renderer::new(&g.device, &g.queue, s.clone()).unwrap();
+    for frame in 1..=settle + 7 {
+        late.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        assert_eq!(runs(&late), frame <= settle + 5, "frame {frame}");
+        if frame == settle + 2 {
+            late.settle();
+        }
+    }
+
     let mut always =
         Renderer::new(&g.device, &g.queue, Settings { radiosity: never, ..s }).unwrap();
     for _ in 0..settle + 8 {
