@@ -315,6 +315,9 @@ pub struct Renderer {
     still: Option<StillKey>,
     /// [`redraw`](Renderer::redraw) was called: the next frame keeps nothing.
     redraw: bool,
+    /// [`set_environment`](Renderer::set_environment) was called: the next frame runs the
+    /// reflections (missed rays see the environment) even where a still view would keep them.
+    environment_changed: bool,
     /// Frames in a row whose view (camera, last camera, scene) was the last frame's: the
     /// radiosity's filter averages longer as it grows
     /// ([`RadiositySettings::history_weight`](crate::RadiositySettings::history_weight)).
@@ -495,6 +498,7 @@ impl Renderer {
             shadow_generation: 0,
             still: None,
             redraw: false,
+            environment_changed: false,
             still_frames: 0,
             settled_at: None,
             settings,
@@ -559,6 +563,7 @@ impl Renderer {
                 Some(EnvironmentBuffer { texels, size: (env.width(), env.height()) })
             }
         };
+        self.environment_changed = true;
         Ok(())
     }
 
@@ -708,7 +713,7 @@ impl Renderer {
                     .settings
                     .radiosity
                     .kept_when_still(self.radiosity_still_at(self.still_frames + 1));
-            let reflections_kept = !ao && !radiosity;
+            let reflections_kept = !ao && !radiosity && !self.environment_changed;
             if ao
                 && !plan.contains(&PassId::AoTemporal)
                 && let Some(i) = plan.passes.iter().position(|p| *p == PassId::Ao)
@@ -841,6 +846,7 @@ impl Renderer {
         // Set again once the frame is recorded: a frame that stops on an error keeps nothing.
         self.still = None;
         self.redraw = false;
+        self.environment_changed = false;
         if provided {
             plan.passes.retain(|p| !p.is_gbuffer());
             // The peels are drawn against the rasterizer's layer 0, which a provided G-buffer

@@ -687,4 +687,21 @@ fn a_still_view_keeps_its_reflections() {
         assert!(x.reflections == y.reflections, "frame {frame}: reflections differ");
         assert!(x.hdr == y.hdr, "frame {frame}: the image differs");
     }
+    // A new environment is seen at once: the next frame runs them, the one after keeps them.
+    let sky = gradient();
+    for r in [&mut kept, &mut full] {
+        r.set_environment(&g.device, Some(&sky)).unwrap();
+    }
+    for frame in 0..2 {
+        full.redraw();
+        for r in [&mut kept, &mut full] {
+            r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
+        }
+        assert_eq!(runs(&kept), frame == 0, "frame {frame} after the new environment");
+        let (x, y) = (
+            kept.read_terms(&g.device, &g.queue).unwrap(),
+            full.read_terms(&g.device, &g.queue).unwrap(),
+        );
+        assert!(x.reflections == y.reflections && x.hdr == y.hdr, "frame {frame}");
+    }
 }
