@@ -705,7 +705,8 @@ impl Renderer {
         if !provided && self.is_still(scene, camera, &plan) {
             // The obscurance goes on averaging turned slices for a while, with the temporal
             // filter or, without it, in a mean of the still frames alone.
-            let ao = self.settings.ao.runs_when_still(self.still_frames + 1);
+            let ao =
+                plan.runs(Effect::Ao) && self.settings.ao.runs_when_still(self.still_frames + 1);
             // The radiosity, once its settled mean holds enough frames; the reflections,
             // whenever nothing they read (the obscurance, the radiosity) runs this frame.
             let radiosity = plan.runs(Effect::Radiosity)
@@ -720,7 +721,7 @@ impl Renderer {
             {
                 plan.passes.insert(i + 1, PassId::AoTemporal);
             }
-            let (kept, run): (Vec<PassId>, Vec<PassId>) =
+            let (mut kept, mut run): (Vec<PassId>, Vec<PassId>) =
                 plan.passes.into_iter().partition(|p| match p.effect() {
                     Some(Effect::Radiosity) => !radiosity,
                     Some(Effect::Reflections) => reflections_kept,
@@ -732,12 +733,9 @@ impl Renderer {
                 });
             // With nothing before them to run, the composite and the passes after it would
             // write the image they wrote.
-            let (run, kept) = if run.iter().all(|p| p.stage() == StageId::Composite || p.is_post())
-            {
-                (Vec::new(), kept.into_iter().chain(run).collect())
-            } else {
-                (run, kept)
-            };
+            if run.iter().all(|p| p.stage() == StageId::Composite || p.is_post()) {
+                kept.append(&mut run);
+            }
             plan.passes = run;
             plan.reused.extend(kept);
         }

@@ -671,21 +671,27 @@ fn a_still_view_keeps_its_reflections() {
     s.radiosity.enabled = false;
     let mut kept = Renderer::new(&g.device, &g.queue, s.clone()).unwrap();
     let mut full = Renderer::new(&g.device, &g.queue, s).unwrap();
-    let runs = |r: &Renderer| r.passes().contains(&deep_gbuffer::PassId::Reflections);
-    for frame in 0..4 {
+    // Renders a frame with both (the full renderer running every pass): whether `kept` ran the
+    // reflections, its reflected light and image checked against the full renderer's.
+    let step = |kept: &mut Renderer, full: &mut Renderer, frame: &str| {
         full.redraw();
-        for r in [&mut kept, &mut full] {
+        for r in [&mut *kept, &mut *full] {
             r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
         }
-        assert!(runs(&full));
-        assert_eq!(runs(&kept), frame == 0, "frame {frame}");
+        let reflects = |r: &Renderer| r.passes().contains(&deep_gbuffer::PassId::Reflections);
+        assert!(reflects(full));
         let (x, y) = (
             kept.read_terms(&g.device, &g.queue).unwrap(),
             full.read_terms(&g.device, &g.queue).unwrap(),
         );
         assert!(x.reflections.as_ref().is_some_and(|r| r.iter().any(|c| c.max_element() > 0.0)));
-        assert!(x.reflections == y.reflections, "frame {frame}: reflections differ");
-        assert!(x.hdr == y.hdr, "frame {frame}: the image differs");
+        assert!(x.reflections == y.reflections, "{frame}: reflections differ");
+        assert!(x.hdr == y.hdr, "{frame}: the image differs");
+        reflects(kept)
+    };
+    for frame in 0..4 {
+        let label = format!("frame {frame}");
+        assert_eq!(step(&mut kept, &mut full, &label), frame == 0, "{label}");
     }
     // A new environment is seen at once: the next frame runs them, the one after keeps them.
     let sky = gradient();
@@ -693,15 +699,7 @@ fn a_still_view_keeps_its_reflections() {
         r.set_environment(&g.device, Some(&sky)).unwrap();
     }
     for frame in 0..2 {
-        full.redraw();
-        for r in [&mut kept, &mut full] {
-            r.render(&g.device, &g.queue, &buffers, &camera).unwrap();
-        }
-        assert_eq!(runs(&kept), frame == 0, "frame {frame} after the new environment");
-        let (x, y) = (
-            kept.read_terms(&g.device, &g.queue).unwrap(),
-            full.read_terms(&g.device, &g.queue).unwrap(),
-        );
-        assert!(x.reflections == y.reflections && x.hdr == y.hdr, "frame {frame}");
+        let label = format!("frame {frame} after the new environment");
+        assert_eq!(step(&mut kept, &mut full, &label), frame == 0, "{label}");
     }
 }
