@@ -280,7 +280,7 @@ pub struct AoSettings {
     /// tested against the tangent plane (suppresses self-occlusion on tessellated curves); its
     /// falloff keeps its true distance. 0.001 at the Cornell box's scale (a five-hundredth of the
     /// radius): ten times that, Scalable Ambient Obscurance's value, gave a higher RMSE on 12
-    /// of the 14 scenes, cameras and sizes measured (README, *The obscurance's bias*).
+    /// of the 14 scenes, cameras and sizes measured (docs/accuracy.md, *The obscurance's bias*).
     pub bias: f32,
     /// Scale of the obscurance sum.
     pub intensity: f32,

@@ -51,7 +51,7 @@
 //   from what every other step alone finds (`extrapolation`, k): E + k (E - E_half). Steps
 //   spaced apart leave open the directions of what stands between them (the fins of an engine
 //   between two steps that land beyond them), so both grow with the steps; the extrapolation
-//   removes the first order of that (README, *Steps crowded towards the point*). The spiral
+//   removes the first order of that (docs/accuracy.md, *Steps crowded towards the point*). The spiral
 //   turns every frame (jitter), and so do the slices.
 // radiosity_gather with RECEIVER = 1 (`radiosity.layer1`, `layer1_samples` taps): the same
 //   gather at layer 1's points, so that a surface the camera does not see passes on the light
@@ -338,8 +338,8 @@ const FACING_SLACK: f32 = 1e-3;
 //   next step's point: `grazing_light`) sends a blend from H towards B by its cosine over GRAZING:
 //   its solid hides the far side of a curved object, which X sees and the camera does not.
 // With them, at 160x120 and with the steps then spread evenly, that ground read 2.1x, and the
-// sphere field's 32nd frame 1.149 of the ten-bounce truth (1.188 without; README, *Curved
-// surfaces*). Reading the next texel along the
+// sphere field's 32nd frame 1.149 of the ten-bounce truth (1.188 without; docs/accuracy.md,
+// *Curved surfaces*). Reading the next texel along the
 // slice instead of waiting for the next step cost the gather 20% more on llvmpipe for figures
 // within 0.01; the rules cost it about 11%.
 const BEND_COS: f32 = 0.95;

@@ -80,7 +80,7 @@ fn slice_spacing(pixel: vec2<u32>, sl: Slice, side: f32, r_px: f32, steps: u32) 
 // their steps so. (For the obscurance an even spread left the
 // engine's fin grooves open: RMSE 0.0948 against 0.0825 at 160x120; t^2 thinned the far steps
 // until the Cornell box's creases at a distance lost occlusion: bias +0.013. For the radiosity,
-// README, *Steps crowded towards the point*.)
+// docs/accuracy.md, *Steps crowded towards the point*.)
 fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
     let t = (f32(j) + jitter) / f32(steps);
     return spacing * f32(steps) * t * sqrt(t);
