@@ -272,6 +272,15 @@ struct TruthArgs {
     /// black), to set beside the truth's --exr pixel by pixel.
     #[arg(long, requires = "compare")]
     estimate_exr: Option<PathBuf>,
+    /// With --compare: write where the GPU's estimate errs as PNG: white where it meets the
+    /// truth, shading to red where it is too high and to blue where it is too low (full colour
+    /// at --error-scale), dark grey outside the pixels compared.
+    #[arg(long, requires = "compare")]
+    error_png: Option<PathBuf>,
+    /// The error --error-png shows at full colour, in the effect's units [default: 0.25 for
+    /// ao, the truth's mean for the others].
+    #[arg(long, requires = "error_png", allow_hyphen_values = true)]
+    error_scale: Option<f32>,
 }
 
 /// The obscurance's settings (render, and truth's GPU estimate). Those not given keep the
@@ -771,8 +780,16 @@ fn apply_camera(camera: &mut Camera, spec: &str) -> Result<()> {
 
 fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
     let (w, h) = args.size;
-    for path in [&args.out, &args.exr].into_iter().flatten() {
+    for path in [&args.out, &args.exr, &args.estimate_exr, &args.error_png].into_iter().flatten() {
         output::check_writable(path)?;
+    }
+    if let Some(scale) = args.error_scale
+        && !(scale.is_finite() && scale > 0.0)
+    {
+        return Err(Error::InvalidSetting {
+            name: "error_scale",
+            message: format!("{scale} (must be finite and > 0)"),
+        });
     }
     let (scene, camera) = args.view.scene_and_camera(&args.scene, args.size, &args.limits)?;
     // The GPU estimate's settings, checked before the truth is traced; the truth's obscurance
@@ -936,6 +953,21 @@ fn truth(adapter: &Option<String>, args: TruthArgs) -> Result<()> {
             ms,
             gpu.describe()
         );
+        if let Some(path) = &args.error_png {
+            // The truth's mean is 0 (or not a number) only where nothing was compared.
+            let scale = match (args.error_scale, args.effect) {
+                (Some(scale), _) => scale,
+                (None, TruthEffect::Ao) => 0.25,
+                (None, _) if stats.truth_mean > 0.0 => stats.truth_mean,
+                (None, _) => 1.0,
+            };
+            let map = deep_gbuffer::truth::metrics::error_map(&estimate, &mask, &image, scale);
+            output::write_png_display(path, w, h, &map)?;
+            println!(
+                "error map: {} (full red: the estimate {scale:.4} or more too high; full blue: as much too low)",
+                path.display()
+            );
+        }
     }
     Ok(())
 }

@@ -324,11 +324,14 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         .arg(dir.join("ao.exr"))
         .arg("--estimate-exr")
         .arg(dir.join("gpu.exr"))
+        .arg("--error-png")
+        .arg(dir.join("error.png"))
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("mean standard error"), "{stdout}");
+    assert!(stdout.contains("error map: ") && stdout.contains("0.2500"), "{stdout}");
     assert!(stdout.contains("rmse") && stdout.contains(" ms on "), "{stdout}");
     // The truth, its noise and the GPU's estimate (--estimate-exr), each an AV per pixel.
     let read = |file: &str| {
@@ -347,6 +350,24 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
     // The GPU's own values, not the truth's, and obscured in places.
     assert_ne!(truth, estimate);
     assert!(estimate.iter().any(|v| *v > 0.0 && *v < 0.9), "{estimate:?}");
+    // The error map (--error-png) shades each compared pixel by estimate - truth over 0.25:
+    // white where they agree, red where the estimate is higher, blue where it is lower.
+    let map = image::open(dir.join("error.png")).unwrap().to_rgb8();
+    assert_eq!(map.dimensions(), (24, 18));
+    let mut shaded = [0usize; 2];
+    for (i, (t, e)) in truth.iter().zip(&estimate).enumerate() {
+        if !(*t > 0.0 && *e > 0.0) {
+            continue;
+        }
+        let k = ((e - t) / 0.25).clamp(-1.0, 1.0);
+        let want = if k >= 0.0 { [1.0, 1.0 - k, 1.0 - k] } else { [1.0 + k, 1.0 + k, 1.0] };
+        let got = map.get_pixel(i as u32 % 24, i as u32 / 24).0;
+        for c in 0..3 {
+            assert!((f32::from(got[c]) / 255.0 - want[c]).abs() <= 1.0 / 255.0, "{i}: {got:?}");
+        }
+        shaded[usize::from(k < 0.0)] += usize::from(k.abs() > 0.05);
+    }
+    assert!(shaded[0] + shaded[1] > 0, "no pixel differs: {shaded:?}");
     // A preset reaches the estimate (`high`: 64 taps on 4 slices), and an explicit option
     // overrides the preset's (its 64 taps back to the default's 32 on 2 slices, radius 4).
     // The GPU's estimate of one compare run, written to `file`.
@@ -384,6 +405,19 @@ fn truth_writes_its_image_and_noise_and_compares_with_the_gpu() {
         .unwrap();
     assert!(!output.status.success());
     assert!(String::from_utf8_lossy(&output.stderr).contains("--compare"));
+    // A scale that is not a positive number is refused before anything is traced.
+    for bad in ["0", "-1", "nan", "inf"] {
+        let output = cli()
+            .args(["truth", "builtin:cornell", "--size", "24x18", "--spp", "1", "--compare"])
+            .arg("--error-png")
+            .arg(dir.join("bad.png"))
+            .args(["--error-scale", bad])
+            .output()
+            .unwrap();
+        assert!(!output.status.success(), "--error-scale {bad} accepted");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains("error_scale") && !stderr.contains("panicked"), "{stderr}");
+    }
     // The full image and the reflections (the sphere field has mirrors), with the GPU's error
     // and, for the image, its SSIM.
     for (effect, scene, expect) in

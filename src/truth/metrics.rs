@@ -102,6 +102,36 @@ pub fn ssim(
         .map_or(0.0, |s| s.score as f32)
 }
 
+/// Where an estimate errs, as a picture: per pixel the signed error `estimate - truth` (channel
+/// means) over `scale`, on a diverging scale in display space (for
+/// [`crate::output::write_png_display`]): white where the two agree, shading to red where the
+/// estimate is `scale` or more too high and to blue where it is `scale` or more too low; dark
+/// grey where either sees no surface (outside the comparison), black where the error is not a
+/// number (a NaN or an infinity in the estimate).
+pub fn error_map(estimate: &[Vec3], mask: &[bool], truth: &TruthImage, scale: f32) -> Vec<Vec3> {
+    let outside = Vec3::splat(0.25);
+    estimate
+        .iter()
+        .zip(mask)
+        .zip(truth.value.iter().zip(&truth.visible))
+        .map(|((e, m), (t, v))| {
+            if !(*m && *v) {
+                return outside;
+            }
+            let d = (e.element_sum() - t.element_sum()) / (3.0 * scale);
+            if !d.is_finite() {
+                return Vec3::ZERO;
+            }
+            let k = d.clamp(-1.0, 1.0);
+            if k >= 0.0 {
+                Vec3::new(1.0, 1.0 - k, 1.0 - k)
+            } else {
+                Vec3::new(1.0 + k, 1.0 + k, 1.0)
+            }
+        })
+        .collect()
+}
+
 /// Temporal instability of a quantity that belongs to the surface, not the view (obscurance,
 /// irradiance): the mean absolute frame-to-frame change at the same surface point. Each pixel of
 /// `current` is compared with `previous` at the position its point had in the previous frame
@@ -164,6 +194,34 @@ pub fn temporal_change(
 
 #[cfg(test)]
 mod tests {
+    /// The error map: white where the estimate meets the truth, full red and blue at `scale`
+    /// too high and too low (and past it), half-way colours at half of it, dark grey outside
+    /// the comparison, black for a NaN.
+    #[test]
+    fn the_error_map_shades_the_signed_error() {
+        use glam::Vec3;
+        let truth = super::TruthImage {
+            width: 7,
+            height: 1,
+            value: vec![Vec3::splat(0.5); 7],
+            stderr: vec![Vec3::ZERO; 7],
+            visible: vec![true, true, true, true, true, true, false],
+        };
+        let estimate: Vec<Vec3> =
+            [0.5, 0.75, 0.25, 0.625, 1.5, f32::NAN, 0.5].map(Vec3::splat).to_vec();
+        let mut mask = vec![true; 7];
+        let map = super::error_map(&estimate, &mask, &truth, 0.25);
+        assert_eq!(map[0], Vec3::ONE);
+        assert_eq!(map[1], Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(map[2], Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(map[3], Vec3::new(1.0, 0.5, 0.5));
+        assert_eq!(map[4], Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(map[5], Vec3::ZERO);
+        assert_eq!(map[6], Vec3::splat(0.25));
+        mask[0] = false;
+        assert_eq!(super::error_map(&estimate, &mask, &truth, 0.25)[0], Vec3::splat(0.25));
+    }
+
     use super::*;
 
     /// The median relative error skips the pixels under a tenth of the truth's mean (here the
