@@ -368,7 +368,8 @@ struct RadiosityArgs {
     #[arg(long)]
     radiosity_samples: Option<u32>,
     /// How far a surface the slices gather finds reaches behind itself, as a fraction of the
-    /// gather's radius (no deeper than layer 1's surface) [default: 0.75].
+    /// gather's radius (layer 0's no deeper than layer 1's surface, layer 1's no deeper than the
+    /// gap in front of it) [default: 0.75].
     #[arg(long)]
     radiosity_thickness: Option<f32>,
     /// Slices per pixel of the slices gather [default: 2].

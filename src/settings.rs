@@ -122,8 +122,8 @@ pub enum AoEstimator {
     /// height field.
     Horizon,
     /// As `horizon`, but a surface is solid only `thickness` behind itself, and no deeper than
-    /// the next layer's surface at that pixel, which is solid behind itself in turn: thin
-    /// objects in front of others stop hiding them.
+    /// the next layer's surface at that pixel, which is solid behind itself in turn (no deeper
+    /// than the gap between the two): thin objects in front of others stop hiding them.
     #[default]
     Bitmask,
 }

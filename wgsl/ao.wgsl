@@ -22,8 +22,8 @@
 // out to the projected radius (or to the screen's edge where the slice's line leaves the screen
 // first) read the pyramid as `sao` does (level floor(log2 h) - mip_offset
 // for a step h pixels away), but never a level coarser than the step spacing; each
-// layer's point there hides the arc of its solid (`thickness` deep, no deeper than layer 1's
-// surface, for `bitmask`; without end, a height field, for `horizon`: thickness 0), and the
+// layer's point there hides the arc of its solid (`thickness` deep, layer 0's no deeper than
+// layer 1's surface and layer 1's no deeper than the gap in front of it, for `bitmask`; without end, a height field, for `horizon`: thickness 0), and the
 // sectors it hides first count at the falloff of its own distance (the surface is what those
 // directions meet first; the solid only decides which directions they are: taking the solid's
 // nearest point instead darkens with the thickness, measured). Points are lowered by beta

@@ -39,7 +39,8 @@
 //   shared/slices.wgsl instead: steps out to the world-space radius (or, where the slice's line
 //   leaves the screen first, to the screen's edge) read both layers' points at
 //   full resolution, each point's solid (`thickness` deep, layer 0's no deeper than layer 1's
-//   surface) hides an arc of sectors, and the sectors a point hides first take its B: each
+//   surface, layer 1's no deeper than the gap in front of it: shared/slices.wgsl's
+//   solid_backs) hides an arc of sectors, and the sectors a point hides first take its B: each
 //   surface's light arrives at the cosine-weighted solid angle it subtends from X, none
 //   through a surface that hides it, and (with the normal test, the default) a surface facing
 //   away sends H. With g = B in the slices' sum the surfaces deliver

@@ -53,7 +53,7 @@ pub fn step_distance(spacing: f32, j: u32, steps: u32, jitter: f32) -> f32 {
 pub fn solid_backs(z0: f32, z1: f32, thickness: f32) -> (f32, f32) {
     if thickness > 0.0 {
         let back0 = if z1 > z0 { (z0 + thickness).min(z1) } else { z0 + thickness };
-        (back0, z1 + thickness)
+        (back0, z1 + thickness.min((z1 - z0).max(0.0)))
     } else {
         (if z1 > z0 { z1 } else { 0.0 }, 0.0)
     }
@@ -251,5 +251,17 @@ mod tests {
         }
         let last = step_distance(spacing, steps - 1, steps, 0.999_999);
         assert!((last - spacing * steps as f32).abs() < 1e-3, "{last}");
+    }
+
+    /// Layer 0's solid ends at layer 1's surface or `thickness` behind itself, whichever is
+    /// nearer; layer 1's is `thickness` deep but no deeper than the gap in front of it; a
+    /// thickness of 0 makes layer 0 solid down to layer 1 and layer 1 without end (0).
+    #[test]
+    fn the_second_layer_is_no_deeper_than_the_gap_in_front_of_it() {
+        assert_eq!(solid_backs(1.0, 1.25, 0.5), (1.25, 1.5));
+        assert_eq!(solid_backs(1.0, 3.0, 0.5), (1.5, 3.5));
+        assert_eq!(solid_backs(1.0, 0.0, 0.5).0, 1.5);
+        assert_eq!(solid_backs(1.0, 1.25, 0.0), (1.25, 0.0));
+        assert_eq!(solid_backs(1.0, 0.0, 0.0), (0.0, 0.0));
     }
 }
