@@ -163,10 +163,9 @@ fn segment_distance(c: vec3<f32>, y: vec3<f32>, back: vec3<f32>, endless: bool) 
 // makes every surface solid without end (a height field); otherwise layer 0 reaches `thickness`
 // behind itself but no deeper than layer 1's surface, and layer 1 reaches `thickness` behind
 // itself but no deeper than the gap in front of it (z1 - z0): what lies close behind layer 0
-// is as fine as that gap (the next fin of a row of fins; the inside of a double-sided box's
-// side, seen through its front near an edge, whose solid lies in front of it). A solid as deep
-// as the thickness there closed gaps that are open: the Cornell box's obscurance RMSE
-// 0.0402 -> 0.0368, the engine's 0.0570 -> 0.0532 (320x240; README, *The second layer's solid*).
+// is as fine as that gap (the next fin of a row of fins). A solid as deep as the thickness
+// there closed gaps that are open: the Cornell box's obscurance RMSE 0.0402 -> 0.0368, the
+// engine's 0.0570 -> 0.0532 (320x240; README, *The second layer's solid*).
 fn solid_backs(z0: f32, z1: f32, thickness: f32) -> vec2<f32> {
     if thickness > 0.0 {
         var back0 = z0 + thickness;
