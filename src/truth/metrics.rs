@@ -194,13 +194,14 @@ pub fn temporal_change(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// The error map: white where the estimate meets the truth, full red and blue at `scale`
     /// too high and too low (and past it), half-way colours at half of it, dark grey outside
     /// the comparison, black for a NaN.
     #[test]
     fn the_error_map_shades_the_signed_error() {
-        use glam::Vec3;
-        let truth = super::TruthImage {
+        let truth = TruthImage {
             width: 7,
             height: 1,
             value: vec![Vec3::splat(0.5); 7],
@@ -210,7 +211,7 @@ mod tests {
         let estimate: Vec<Vec3> =
             [0.5, 0.75, 0.25, 0.625, 1.5, f32::NAN, 0.5].map(Vec3::splat).to_vec();
         let mut mask = vec![true; 7];
-        let map = super::error_map(&estimate, &mask, &truth, 0.25);
+        let map = error_map(&estimate, &mask, &truth, 0.25);
         assert_eq!(map[0], Vec3::ONE);
         assert_eq!(map[1], Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(map[2], Vec3::new(0.0, 0.0, 1.0));
@@ -219,10 +220,8 @@ mod tests {
         assert_eq!(map[5], Vec3::ZERO);
         assert_eq!(map[6], Vec3::splat(0.25));
         mask[0] = false;
-        assert_eq!(super::error_map(&estimate, &mask, &truth, 0.25)[0], Vec3::splat(0.25));
+        assert_eq!(error_map(&estimate, &mask, &truth, 0.25)[0], Vec3::splat(0.25));
     }
-
-    use super::*;
 
     /// The median relative error skips the pixels under a tenth of the truth's mean (here the
     /// last, which the estimate overshoots fivefold) and the ones the masks leave out.
