@@ -301,7 +301,8 @@ struct AoArgs {
     #[arg(long)]
     ao_slices: Option<u32>,
     /// How far an occluder reaches behind its visible surface, as a fraction of the radius
-    /// (bitmask) [default: 0.75].
+    /// (bitmask; layer 0's no deeper than layer 1's surface, layer 1's no deeper than the gap in
+    /// front of it) [default: 0.75].
     #[arg(long)]
     ao_thickness: Option<f32>,
     /// Weight of the steps' extrapolation of the horizon and bitmask estimators, 0 to 2 (0:

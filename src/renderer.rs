@@ -959,7 +959,7 @@ impl Renderer {
         }
         st.direct.prepare(queue, scene, s, plan);
         // A still view that keeps its radiosity keeps this frame's buffers as they are.
-        if plan.runs(Effect::Radiosity) && plan.contains(&PassId::Radiosity) {
+        if plan.contains(&PassId::Radiosity) {
             // The history is usable only if this stage drew the last frame.
             let history = self.history.is_some() && st.radiosity.is_some();
             let radiosity = st.radiosity.get_or_insert_with(|| RadiosityStage::new(device, s));

@@ -262,7 +262,8 @@ pub struct AoSettings {
     /// `samples` taps are shared among the slices, half on each side. 1 to 16.
     pub slices: u32,
     /// How far an occluder reaches behind its visible surface, as a fraction of `radius`
-    /// (`bitmask`): relative, so that it follows the scale the radius is chosen for.
+    /// (`bitmask`): relative, so that it follows the scale the radius is chosen for. Layer 0's
+    /// no deeper than layer 1's surface, layer 1's no deeper than the gap in front of it.
     pub thickness: f32,
     /// World-space radius of the neighbourhood, in scene units.
     pub radius: f32,
